@@ -1,0 +1,40 @@
+"""One sensor's measurement set Z_r^t (Dames Sec. II) as a plain value."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Scan:
+    """Measurement set of robot ``robot_id`` at step ``step``.
+
+    Attributes
+    ----------
+    robot_id : int
+        Sender; measurement sets are applied in increasing robot id (Dames Alg. 2).
+    step : int
+        Filter step the scan belongs to.
+    sensor : np.ndarray, shape (2,)
+        Sensor position q [m], world frame.
+    z : np.ndarray, shape (M, 2)
+        Measured target positions [m], world frame; M may be 0.
+    """
+
+    robot_id: int
+    step: int
+    sensor: np.ndarray
+    z: np.ndarray
+
+    def __post_init__(self) -> None:
+        sensor = np.asarray(self.sensor, dtype=float).reshape(-1)[:2]
+        z = np.asarray(self.z, dtype=float).reshape(-1, 2)
+        if sensor.shape != (2,) or not np.all(np.isfinite(sensor)):
+            raise ValueError(f"scan of robot {self.robot_id}: sensor position must be two "
+                             f"finite numbers, got {self.sensor!r}")
+        if not np.all(np.isfinite(z)):
+            raise ValueError(f"scan of robot {self.robot_id}: measurements must be finite")
+        object.__setattr__(self, "sensor", sensor)
+        object.__setattr__(self, "z", z)

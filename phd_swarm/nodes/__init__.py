@@ -1,0 +1,1 @@
+"""rclpy adapters over phd_swarm.core: one Node subclass per module."""

@@ -1,0 +1,178 @@
+"""Helpers for tests that run ROS 2 nodes in-process or as child processes.
+
+``InProcessRos`` gives a test its own rclpy ``Context`` on its own ``ROS_DOMAIN_ID``, an
+executor on that context, and ``spin_until(predicate, timeout)``; it shuts everything down
+even when the test fails (the pattern of rclpy's own ``test_executor.py``).
+
+``ChildProcesses`` starts processes with DDS kept on loopback and stops them by PID (the
+whole process group), even on failure, then removes the Fast DDS shared-memory files that
+killed processes leave behind.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import shutil
+import signal
+import subprocess
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+_domain_counter = itertools.count()
+
+
+def fresh_domain_id() -> int:
+    """A ROS_DOMAIN_ID in [120, 219] that differs between calls and between test processes."""
+    return 120 + (os.getpid() * 7 + next(_domain_counter)) % 100
+
+
+def loopback_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """Environment for a child ROS process: DDS on loopback, the given domain id."""
+    env = dict(os.environ if base is None else base)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(domain_id)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+class InProcessRos:
+    """A private rclpy context, executor and node factory for one test.
+
+    Use as a context manager::
+
+        with InProcessRos() as ros:
+            node = ros.node("talker")
+            ros.spin_until(lambda: got, timeout=5.0)
+    """
+
+    def __init__(self, domain_id: int | None = None, executor: str = "single") -> None:
+        self.domain_id = fresh_domain_id() if domain_id is None else domain_id
+        self._executor_kind = executor
+        self.context: Any = None
+        self.executor: Any = None
+        self._nodes: list[Any] = []
+
+    def __enter__(self) -> InProcessRos:
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+
+        os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        if os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] != "LOCALHOST":
+            raise RuntimeError("refusing to start ROS with DDS discovery beyond loopback: "
+                               "set ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST")
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=self.domain_id)
+        try:
+            if self._executor_kind == "single":
+                self.executor = SingleThreadedExecutor(context=self.context)
+            elif self._executor_kind == "multi":
+                self.executor = MultiThreadedExecutor(context=self.context)
+            elif self._executor_kind == "events":
+                from rclpy.experimental import EventsExecutor
+                self.executor = EventsExecutor(context=self.context)
+            else:
+                raise ValueError(f"unknown executor kind {self._executor_kind!r}")
+        except BaseException:
+            rclpy.try_shutdown(context=self.context)
+            raise
+        return self
+
+    def node(self, name: str, **kwargs: Any) -> Any:
+        """Create a node on this context and add it to the executor."""
+        import rclpy
+
+        node = rclpy.create_node(name, context=self.context, **kwargs)
+        self.add(node)
+        return node
+
+    def add(self, node: Any) -> Any:
+        """Add an already created node (on this context) to the executor; returns it."""
+        self._nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def spin_until(self, predicate: Callable[[], bool], timeout: float,
+                   step: float = 0.01) -> bool:
+        """Spin the executor until ``predicate()`` is true or ``timeout`` [s] passes."""
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() >= deadline:
+                return bool(predicate())
+            self.executor.spin_once(timeout_sec=step)
+        return True
+
+    def __exit__(self, *exc: object) -> None:
+        import rclpy
+
+        try:
+            for node in self._nodes:
+                try:
+                    self.executor.remove_node(node)
+                finally:
+                    node.destroy_node()
+        finally:
+            self._nodes.clear()
+            try:
+                self.executor.shutdown()
+            finally:
+                rclpy.try_shutdown(context=self.context)
+
+
+class ChildProcesses:
+    """Start ROS processes on loopback and always stop them by PID (process group)."""
+
+    def __init__(self, domain_id: int | None = None) -> None:
+        self.domain_id = fresh_domain_id() if domain_id is None else domain_id
+        self.procs: list[subprocess.Popen] = []
+
+    def start(self, argv: Sequence[str], env: Mapping[str, str] | None = None,
+              **popen_kwargs: Any) -> subprocess.Popen:
+        """Start ``argv`` in its own process group with the loopback environment."""
+        full_env = loopback_env(self.domain_id)
+        if env:
+            full_env.update(env)
+        popen_kwargs.setdefault("stdout", subprocess.PIPE)
+        popen_kwargs.setdefault("stderr", subprocess.PIPE)
+        popen_kwargs.setdefault("text", True)
+        proc = subprocess.Popen(list(argv), env=full_env, start_new_session=True,
+                                **popen_kwargs)
+        self.procs.append(proc)
+        return proc
+
+    def stop(self, proc: subprocess.Popen, grace: float = 5.0) -> None:
+        """SIGINT the process group, then SIGKILL it after ``grace`` seconds."""
+        if proc.poll() is None:
+            for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
+                try:
+                    os.killpg(proc.pid, sig)
+                except ProcessLookupError:
+                    break
+                try:
+                    proc.wait(timeout=wait)
+                    break
+                except subprocess.TimeoutExpired:
+                    continue
+        # Reap the group even if the leader already exited.
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+    def __enter__(self) -> ChildProcesses:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for proc in self.procs:
+            self.stop(proc)
+        clean_fastdds_shm()
+
+
+def clean_fastdds_shm() -> None:
+    """Remove Fast DDS shared-memory files of dead processes (``fastdds shm clean``)."""
+    tool = shutil.which("fastdds")
+    if tool is None:
+        return
+    subprocess.run([tool, "shm", "clean"], stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, timeout=30, check=False)

@@ -1,0 +1,46 @@
+# shellcheck shell=bash
+# Environment of phd_swarm, sourced by every script (and by users: `source scripts/env.sh`).
+#
+# - PyPI-wheel install: activates the project's virtual environment (.venv) and points the
+#   ament/CMake prefix paths at it; native install: uses the ROS already sourced
+#   (/opt/ros/jazzy/setup.bash) when there is no .venv.
+# - Sources the colcon install space if it has been built.
+# - Keeps DDS on loopback: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and a ROS_DOMAIN_ID of its
+#   own. Both can be overridden by the caller (export them before sourcing).
+
+PHD_SWARM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+export PHD_SWARM_ROOT
+PHD_SWARM_VENV="${PHD_SWARM_VENV:-$PHD_SWARM_ROOT/.venv}"
+export PHD_SWARM_VENV
+
+if [ -x "$PHD_SWARM_VENV/bin/python" ]; then
+  # shellcheck disable=SC1091
+  VIRTUAL_ENV_DISABLE_PROMPT=1 source "$PHD_SWARM_VENV/bin/activate"
+  case ":${AMENT_PREFIX_PATH:-}:" in
+    *":$PHD_SWARM_VENV:"*) ;;
+    *) export AMENT_PREFIX_PATH="$PHD_SWARM_VENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}" ;;
+  esac
+  case ":${CMAKE_PREFIX_PATH:-}:" in
+    *":$PHD_SWARM_VENV:"*) ;;
+    *) export CMAKE_PREFIX_PATH="$PHD_SWARM_VENV${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}" ;;
+  esac
+  # The Fast DDS tools in the venv (fastdds, fast-discovery-server) need its libraries.
+  case ":${LD_LIBRARY_PATH:-}:" in
+    *":$PHD_SWARM_VENV/lib:"*) ;;
+    *) export LD_LIBRARY_PATH="$PHD_SWARM_VENV/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" ;;
+  esac
+  export ROS_DISTRO="${ROS_DISTRO:-jazzy}"
+fi
+
+if [ -f "$PHD_SWARM_ROOT/install/local_setup.bash" ]; then
+  # colcon's setup scripts read unset variables; relax -u around them.
+  case $- in *u*) _phd_nounset=1; set +u ;; *) _phd_nounset=0 ;; esac
+  # shellcheck disable=SC1091
+  COLCON_CURRENT_PREFIX="$PHD_SWARM_ROOT/install" source "$PHD_SWARM_ROOT/install/local_setup.bash"
+  [ "$_phd_nounset" = 1 ] && set -u
+  unset _phd_nounset
+fi
+
+export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
+export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-42}"
+export PYTHONUNBUFFERED=1

@@ -1,0 +1,331 @@
+"""Tests of Chen's cumulative density (eq. 8-11), power weights (eq. 13-14) and Alg. 1."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from phd_swarm.core.cumulative import (
+    CumulativeConfig,
+    chen_lloyd_weights,
+    cumulative_init,
+    cumulative_update,
+    cumulative_weight,
+    power_weight,
+)
+from phd_swarm.core.grid import Environment
+
+
+def observe(rewards: list[bool], size: int = 1, fov=None) -> tuple[np.ndarray, np.ndarray]:
+    """Apply one scan per reward to a fresh state; every bin in view unless ``fov``."""
+    alpha, n = cumulative_init(size)
+    fov = np.ones(size, dtype=bool) if fov is None else fov
+    for r in rewards:
+        alpha, n = cumulative_update(alpha, n, fov, r)
+    return alpha, n
+
+
+# ---------------------------------------------------------------- eq. 9-11 by hand
+
+def test_initial_state() -> None:
+    alpha, n = cumulative_init(4)
+    np.testing.assert_array_equal(alpha, np.zeros(4))
+    np.testing.assert_array_equal(n, np.zeros(4, dtype=np.int64))
+    assert n.dtype == np.int64
+    for mode in ("rate", "literal"):
+        np.testing.assert_array_equal(cumulative_weight(alpha, n, mode), np.zeros(4))
+
+
+def test_three_observations_rewards_1_0_1() -> None:
+    alpha, n = observe([True, False, True])
+    assert alpha[0] == 2.0
+    assert n[0] == 3
+    assert cumulative_weight(alpha, n, "rate")[0] == pytest.approx(1.0 / 3.0)
+    assert cumulative_weight(alpha, n, "literal")[0] == pytest.approx(3.0)
+    assert cumulative_weight(alpha, n)[0] == pytest.approx(1.0 / 3.0)  # rate is default
+
+
+def test_beta_is_inverse_count() -> None:
+    # Eq. 9 from beta = inf: (inf^-1 + 1)^-1 = 1, then 1/2, 1/3, ...
+    beta = np.inf
+    alpha, n = cumulative_init(1)
+    for _ in range(5):
+        beta = 1.0 / (1.0 / beta + 1.0)
+        alpha, n = cumulative_update(alpha, n, np.array([0]), False)
+        assert beta == pytest.approx(1.0 / n[0])
+
+
+def test_literal_matches_paper_formula() -> None:
+    # wc = (alpha - 1) / beta with beta = 1/n.
+    alpha, n = observe([True, True, False, True, True])
+    beta = 1.0 / n[0]
+    assert cumulative_weight(alpha, n, "literal")[0] == pytest.approx((alpha[0] - 1) / beta)
+    assert cumulative_weight(alpha, n, "rate")[0] == pytest.approx((4 - 1) / 5)
+
+
+@pytest.mark.parametrize("mode", ["rate", "literal"])
+def test_alpha_below_one_gives_zero(mode: str) -> None:
+    alpha = np.array([0.0, 0.5, 0.999, 1.0, 2.0])
+    n = np.array([0, 3, 7, 4, 4])
+    wc = cumulative_weight(alpha, n, mode)
+    np.testing.assert_array_equal(wc[:4], 0.0)
+    assert wc[4] == pytest.approx(0.25 if mode == "rate" else 4.0)
+
+
+def test_only_empty_scans_give_zero() -> None:
+    alpha, n = observe([False] * 10)
+    assert alpha[0] == 0.0 and n[0] == 10
+    assert cumulative_weight(alpha, n, "rate")[0] == 0.0
+    assert cumulative_weight(alpha, n, "literal")[0] == 0.0
+
+
+def test_one_reward_gives_zero_mode() -> None:
+    # Gamma with shape 1 is an exponential: its mode is 0.
+    alpha, n = observe([True])
+    assert cumulative_weight(alpha, n, "rate")[0] == 0.0
+    assert cumulative_weight(alpha, n, "literal")[0] == 0.0
+
+
+def test_bins_outside_fov_unchanged_mask() -> None:
+    alpha = np.array([0.0, 2.0, 5.0, 1.0])
+    n = np.array([0, 3, 9, 1])
+    fov = np.array([False, True, False, True])
+    new_alpha, new_n = cumulative_update(alpha, n, fov, True)
+    np.testing.assert_array_equal(new_alpha, [0.0, 3.0, 5.0, 2.0])
+    np.testing.assert_array_equal(new_n, [0, 4, 9, 2])
+    new_alpha, new_n = cumulative_update(alpha, n, fov, False)
+    np.testing.assert_array_equal(new_alpha, alpha)
+    np.testing.assert_array_equal(new_n, [0, 4, 9, 2])
+
+
+def test_indices_equal_mask_and_duplicates_count_once() -> None:
+    alpha, n = np.array([0.0, 1.0, 1.0, 2.0, 0.0]), np.array([0, 1, 2, 3, 4])
+    by_idx = cumulative_update(alpha, n, np.array([3, 1, 1]), True)
+    by_mask = cumulative_update(alpha, n, np.array([False, True, False, True, False]), True)
+    for a, b in zip(by_idx, by_mask, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(by_idx[0], [0.0, 2.0, 1.0, 3.0, 0.0])
+    np.testing.assert_array_equal(by_idx[1], [0, 2, 2, 4, 4])
+
+
+def test_empty_fov_changes_nothing() -> None:
+    alpha, n = np.array([1.0, 2.0]), np.array([3, 4])
+    for fov in (np.array([], dtype=np.int64), [], np.zeros(2, dtype=bool)):
+        new_alpha, new_n = cumulative_update(alpha, n, fov, True)
+        np.testing.assert_array_equal(new_alpha, alpha)
+        np.testing.assert_array_equal(new_n, n)
+
+
+def test_update_is_pure() -> None:
+    alpha, n = np.array([1.0, 2.0]), np.array([3, 4])
+    a0, n0 = alpha.copy(), n.copy()
+    new_alpha, new_n = cumulative_update(alpha, n, np.array([True, True]), True)
+    np.testing.assert_array_equal(alpha, a0)
+    np.testing.assert_array_equal(n, n0)
+    assert new_alpha is not alpha and new_n is not n
+
+
+def test_float_counts_accepted() -> None:
+    new_alpha, new_n = cumulative_update([0.0, 1.0], np.array([0.0, 2.0]), [1], True)
+    np.testing.assert_array_equal(new_n, [0, 3])
+    assert new_n.dtype == np.int64
+
+
+# ---------------------------------------------------------------- rate vs literal
+
+def test_literal_grows_without_bound_rate_does_not() -> None:
+    # Every other scan has a measurement: literal ~ n^2 / 2, rate -> 1/2.
+    rewards = [i % 2 == 0 for i in range(1000)]
+    alpha, n = observe(rewards)
+    assert cumulative_weight(alpha, n, "literal")[0] == pytest.approx((500 - 1) * 1000)
+    assert cumulative_weight(alpha, n, "rate")[0] == pytest.approx(499 / 1000)
+    lit = [cumulative_weight(*observe(rewards[:k]), "literal")[0] for k in (10, 100, 1000)]
+    assert lit[0] < lit[1] < lit[2]
+
+
+def test_literal_ranks_often_watched_empty_bin_above_rarely_watched_busy_bin() -> None:
+    # The paper's formula: 2 rewards in 100 looks beats 3 in 3; the rate ranks them right.
+    a_often, n_often = observe([True, True] + [False] * 98)
+    a_rare, n_rare = observe([True, True, True])
+    lit = (cumulative_weight(a_often, n_often, "literal")[0],
+           cumulative_weight(a_rare, n_rare, "literal")[0])
+    rate = (cumulative_weight(a_often, n_often, "rate")[0],
+            cumulative_weight(a_rare, n_rare, "rate")[0])
+    assert lit[0] > lit[1]
+    assert rate[0] < rate[1]
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(rewards=st.lists(st.booleans(), min_size=0, max_size=60))
+def test_rate_in_unit_interval(rewards: list[bool]) -> None:
+    alpha, n = observe(rewards)
+    rate = cumulative_weight(alpha, n, "rate")[0]
+    literal = cumulative_weight(alpha, n, "literal")[0]
+    assert 0.0 <= rate <= 1.0
+    assert rate < 1.0
+    assert alpha[0] == sum(rewards) and n[0] == len(rewards)
+    assert literal == pytest.approx(rate * n[0] ** 2)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_random_fov_sequences(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    size, steps = 12, 25
+    masks = rng.random((steps, size)) < 0.4
+    rewards = rng.random(steps) < 0.5
+    alpha, n = cumulative_init(size)
+    for mask, r in zip(masks, rewards, strict=True):
+        alpha, n = cumulative_update(alpha, n, mask, bool(r))
+    np.testing.assert_array_equal(n, masks.sum(axis=0))
+    np.testing.assert_array_equal(alpha, (masks & rewards[:, None]).sum(axis=0))
+    rate = cumulative_weight(alpha, n, "rate")
+    assert np.all((rate >= 0) & (rate < 1))
+
+
+# ---------------------------------------------------------------- power weights
+
+def test_power_weight_values() -> None:
+    assert power_weight(4.0, 100.0) == pytest.approx(0.5)
+    assert power_weight(1.0, 100.0) == pytest.approx(1.0)
+    assert power_weight(0.25, 100.0) == pytest.approx(2.0)
+    assert isinstance(power_weight(4.0, 100.0), float)
+
+
+@pytest.mark.parametrize("mass", [0.0, -0.0, -1e-12, -3.0, 1e-300, 5e-324, 1e-30])
+def test_power_weight_finite_and_capped_for_zero_or_tiny_mass(mass: float) -> None:
+    with np.errstate(all="raise"):
+        rho = power_weight(mass, 50.0)
+    assert np.isfinite(rho)
+    assert rho == 50.0
+
+
+def test_power_weight_infinite_mass_is_zero() -> None:
+    assert power_weight(np.inf, 50.0) == 0.0
+
+
+def test_power_weight_array_and_cap() -> None:
+    mass = np.array([[0.0, 1e-6], [0.01, 100.0]])
+    with np.errstate(all="raise"):
+        rho = power_weight(mass, 20.0)
+    assert rho.shape == (2, 2)
+    np.testing.assert_allclose(rho, [[20.0, 20.0], [10.0, 0.1]])
+
+
+def test_power_weight_monotone_decreasing() -> None:
+    mass = np.concatenate([[0.0], np.logspace(-12, 6, 200)])
+    rho = power_weight(mass, 1e3)
+    assert np.all(np.diff(rho) <= 0)
+    assert np.all(np.diff(rho[rho < 1e3]) < 0)
+    assert np.all(np.isfinite(rho)) and np.all(rho <= 1e3)
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(a=st.floats(0.0, 1e300), b=st.floats(0.0, 1e300),
+       rho_max=st.floats(1e-3, 1e6))
+def test_power_weight_monotone_and_bounded_hypothesis(a: float, b: float,
+                                                      rho_max: float) -> None:
+    lo, hi = min(a, b), max(a, b)
+    r_lo, r_hi = power_weight(lo, rho_max), power_weight(hi, rho_max)
+    assert 0.0 <= r_hi <= r_lo <= rho_max
+
+
+@pytest.mark.parametrize("rho_max", [0.0, -1.0, np.inf, np.nan])
+def test_power_weight_invalid_cap(rho_max: float) -> None:
+    with pytest.raises(ValueError, match="rho_max"):
+        power_weight(1.0, rho_max)
+
+
+def test_power_weight_nan_mass() -> None:
+    with pytest.raises(ValueError, match="mass"):
+        power_weight(np.array([1.0, np.nan]), 10.0)
+
+
+def test_power_weight_from_cell_sums_eq13_eq14() -> None:
+    # Eq. 13 sums wc over the cell, eq. 14 sums the PHD; the same function serves both.
+    wc = np.array([0.0, 0.5, 0.5, 0.25, 0.75])
+    phd = np.array([0.0, 0.0, 0.01, 0.0, 0.0])
+    assert power_weight(wc.sum(), 141.0) == pytest.approx(2.0 ** -0.5)
+    assert power_weight(phd.sum(), 141.0) == pytest.approx(10.0)
+    assert power_weight(np.zeros(5).sum(), 141.0) == 141.0
+
+
+# ---------------------------------------------------------------- config, Alg. 1
+
+def test_config_defaults_and_rho_max_for() -> None:
+    cfg = CumulativeConfig()
+    assert cfg.mode == "rate" and cfg.rho_max is None
+    env = Environment(0.0, 0.0, 30.0, 40.0)
+    assert cfg.rho_max_for(env) == pytest.approx(50.0)
+    assert CumulativeConfig(rho_max=12.0).rho_max_for(env) == 12.0
+    assert CumulativeConfig(mode="literal").mode == "literal"
+
+
+@pytest.mark.parametrize("kwargs", [{"mode": "Rate"}, {"mode": "mean"}, {"rho_max": 0.0},
+                                    {"rho_max": -1.0}, {"rho_max": np.inf},
+                                    {"rho_max": np.nan}])
+def test_config_validation(kwargs) -> None:
+    with pytest.raises(ValueError, match="cumulative."):
+        CumulativeConfig(**kwargs)
+
+
+def test_config_is_frozen() -> None:
+    with pytest.raises(AttributeError):
+        CumulativeConfig().mode = "literal"  # type: ignore[misc]
+
+
+def test_chen_lloyd_weights_idle_and_busy() -> None:
+    phd = np.array([0.1, 0.7, 0.0])
+    wc = np.array([0.3, 0.0, 0.2])
+    idle = chen_lloyd_weights(False, phd, wc)
+    busy = chen_lloyd_weights(True, phd, wc)
+    np.testing.assert_array_equal(idle, wc)
+    np.testing.assert_array_equal(busy, phd)
+    idle[0] = 99.0
+    busy[0] = 99.0
+    assert wc[0] == 0.3 and phd[0] == 0.1  # new arrays, inputs untouched
+    np.testing.assert_array_equal(chen_lloyd_weights(np.bool_(True), phd, wc), phd)
+
+
+def test_chen_lloyd_weights_validation() -> None:
+    with pytest.raises(ValueError, match="shape"):
+        chen_lloyd_weights(True, np.zeros(3), np.zeros(4))
+    with pytest.raises(ValueError, match="has_measurement"):
+        chen_lloyd_weights(np.zeros(2), np.zeros(3), np.zeros(3))  # type: ignore[arg-type]
+
+
+# ---------------------------------------------------------------- input validation
+
+@pytest.mark.parametrize("alpha,n,match", [
+    (np.zeros((2, 2)), np.zeros((2, 2)), "alpha"),
+    (np.zeros(3), np.zeros(4), "n "),
+    (np.array([-1.0, 0.0]), np.zeros(2), "alpha"),
+    (np.array([np.nan, 0.0]), np.zeros(2), "alpha"),
+    (np.zeros(2), np.array([1.5, 0.0]), "n "),
+    (np.zeros(2), np.array([-1, 0]), "n "),
+    (np.zeros(2), np.array([True, False]), "n "),
+])
+def test_state_validation(alpha, n, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        cumulative_update(alpha, n, np.array([0]), True)
+    with pytest.raises(ValueError, match=match):
+        cumulative_weight(alpha, n)
+
+
+@pytest.mark.parametrize("fov", [np.zeros(3, dtype=bool), np.array([5]), np.array([-1]),
+                                 np.array([0.5]), np.zeros((2, 2), dtype=np.int64)])
+def test_fov_validation(fov) -> None:
+    with pytest.raises(ValueError, match="in_fov"):
+        cumulative_update(np.zeros(4), np.zeros(4), fov, True)
+
+
+def test_has_measurement_must_be_bool() -> None:
+    with pytest.raises(ValueError, match="has_measurement"):
+        cumulative_update(np.zeros(2), np.zeros(2), [0], 1)  # type: ignore[arg-type]
+
+
+def test_weight_mode_validation() -> None:
+    with pytest.raises(ValueError, match="mode"):
+        cumulative_weight(np.zeros(2), np.zeros(2), "mean")
