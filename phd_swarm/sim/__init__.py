@@ -1,0 +1,1 @@
+"""The simulated world: targets, robot kinematics, the sensor. Seeded numpy Generators only."""

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Benchmarks: `scripts/bench.sh core [--quick]`. Sets up if needed; prints the figures and
+# writes them as JSON under bench/results/.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+usage() { echo "usage: scripts/bench.sh core [--quick]" >&2; exit 2; }
+[ $# -ge 1 ] || usage
+what="$1"; shift
+"$ROOT/scripts/setup.sh" >/dev/null
+set +u
+# shellcheck disable=SC1091
+source "$ROOT/scripts/env.sh"
+set -u
+case "$what" in
+  core) exec python "$ROOT/bench/core.py" "$@" ;;
+  *) usage ;;
+esac

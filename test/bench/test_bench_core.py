@@ -1,0 +1,31 @@
+"""The core benchmark runs through its public entry point and writes its JSON."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_bench_core_quick_prints_and_writes_figures(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "core", "--quick",
+                             "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "team step dames_moving 1.0 m" in result.stdout
+    files = list(tmp_path.glob("core-*.json"))
+    assert len(files) == 1
+    data = json.loads(files[0].read_text())
+    cases = {r["case"]: r for r in data["results"]}
+    assert len(cases) == 6
+    assert all(r["median_ms"] > 0 for r in cases.values())
+    assert data["meta"]["cpus"] >= 1
+
+
+def test_bench_rejects_unknown_suite():
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "nonsense"],
+                            capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 2
+    assert "usage" in result.stderr
