@@ -239,6 +239,36 @@ def power_weight(mass: float | np.ndarray, rho_max: float) -> float | np.ndarray
     return float(rho) if rho.ndim == 0 else rho
 
 
+def cell_mass(values: np.ndarray, bin_area: float, kind: str) -> float:
+    """Expected number of targets in a cell, the argument of :func:`power_weight`.
+
+    ``kind="cumulative"`` (Chen eq. 13, the "O" method): wc is a per-bin rate that Chen
+    Sec. 3.3 treats as a density, so the cell mass is ``sum(wc) * bin_area``; with it rho
+    does not depend on the grid resolution, and at 1 m bins it equals the paper's plain sum.
+    ``kind="phd"`` (eq. 14, the "P" method): PHD weights are already masses, summed as is.
+
+    Parameters
+    ----------
+    values : np.ndarray, shape (K,)
+        wc or PHD weights of the bins the robot owns.
+    bin_area : float
+        Area of one bin [m^2].
+    kind : {"cumulative", "phd"}
+        Which weights ``values`` are.
+
+    Returns
+    -------
+    float
+        Cell mass (expected targets), >= 0 for valid inputs.
+    """
+    total = float(np.sum(np.asarray(values, dtype=float)))
+    if kind == "cumulative":
+        return total * bin_area
+    if kind == "phd":
+        return total
+    raise ValueError(f"cell_mass: kind must be 'cumulative' or 'phd', got {kind!r}")
+
+
 def chen_lloyd_weights(has_measurement: bool, phd_w: np.ndarray,
                        wc: np.ndarray) -> np.ndarray:
     """Choose the importance weights phi over a robot's cell (Chen Alg. 1 lines 12-15).

@@ -329,3 +329,14 @@ def test_has_measurement_must_be_bool() -> None:
 def test_weight_mode_validation() -> None:
     with pytest.raises(ValueError, match="mode"):
         cumulative_weight(np.zeros(2), np.zeros(2), "mean")
+
+
+def test_cell_mass_scales_cumulative_weights_by_bin_area_but_not_phd():
+    from phd_swarm.core.cumulative import cell_mass
+
+    wc = np.full(100, 0.5)  # 100 bins of 0.1 m: 1 m^2 at rate 0.5
+    assert cell_mass(wc, 0.01, "cumulative") == pytest.approx(0.5)
+    assert cell_mass(np.full(1, 0.5), 1.0, "cumulative") == pytest.approx(0.5)
+    assert cell_mass(wc, 0.01, "phd") == pytest.approx(50.0)
+    with pytest.raises(ValueError, match="kind"):
+        cell_mass(wc, 0.01, "mass")
