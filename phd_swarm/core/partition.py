@@ -356,6 +356,63 @@ def _clip_cell(poly: np.ndarray, e: np.ndarray, dist: np.ndarray, h: np.ndarray,
     return poly
 
 
+def cell_of(env: Environment, index: int, positions: np.ndarray,
+            power_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The cell of one generator and its neighbours, without computing the other cells.
+
+    This is what a robot of the distributed filter computes from the states its contacts
+    sent (Dames Alg. 1 line 2): its own cell among the given generators, and which of them
+    touch it. It gives the same polygon as ``cells(...)[index]``; a generator j is a
+    neighbour when a vertex v of this cell has |d_index(v) - d_j(v)| within the tolerance of
+    :func:`neighbours` (a shared edge or corner is a vertex of both cells).
+
+    Parameters
+    ----------
+    env : Environment
+        The rectangle E.
+    index : int
+        Row of ``positions`` whose cell is wanted.
+    positions : np.ndarray, shape (R, 2)
+        Generators q [m] (the robot itself and its contacts, in robot-id order).
+    power_weights : np.ndarray, shape (R,), optional
+        rho [m]; None for Voronoi.
+
+    Returns
+    -------
+    poly : np.ndarray, shape (V, 2)
+        Counter-clockwise cell, (0, 2) if empty.
+    neighbour_rows : np.ndarray of int64
+        Sorted rows of ``positions`` whose cells touch this one (empty for an empty cell).
+    """
+    q, rho2 = _check_generators(positions, power_weights)
+    n_gen = q.shape[0]
+    if not 0 <= index < n_gen:
+        raise ValueError(f"cell_of: index {index} out of range for {n_gen} generators")
+    merge_tol = _MERGE_REL * (env.width + env.height)
+    e = q - q[index]
+    dist2 = e[:, 0] ** 2 + e[:, 1] ** 2
+    same = dist2 == 0.0
+    rows = np.arange(n_gen)
+    beaten = same & ((rho2 > rho2[index]) | ((rho2 == rho2[index]) & (rows < index)))
+    if beaten.any():
+        return np.empty((0, 2)), np.empty(0, dtype=np.int64)
+    dist = np.sqrt(dist2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = np.where(same, np.inf, (dist2 + rho2[index] - rho2) / (2.0 * dist))
+    order = np.argsort(h, kind="stable")
+    h_sorted = h[order]
+    n_far = int(np.count_nonzero(h_sorted < np.inf))
+    poly = _clip_cell(env.corners - q[index], e, dist, h_sorted, order, n_far,
+                      merge_tol) + q[index]
+    if poly.shape[0] == 0:
+        return np.empty((0, 2)), np.empty(0, dtype=np.int64)
+    tol = _TOUCH_REL * (env.width + env.height) ** 2
+    d = (poly[:, 0:1] - q[:, 0]) ** 2 + (poly[:, 1:2] - q[:, 1]) ** 2 - rho2
+    touch = np.any(np.abs(d - d[:, index:index + 1]) <= tol, axis=0)
+    touch[index] = False
+    return poly, np.flatnonzero(touch)
+
+
 def neighbours(env: Environment, positions: np.ndarray,
                power_weights: np.ndarray | None = None,
                cells: list[np.ndarray] | None = None) -> list[np.ndarray]:

@@ -446,3 +446,18 @@ def test_cells_clip_count_is_not_quadratic(monkeypatch):
     cells(ENV, q)
     # Typically ~6 clips per robot (a cell's edge count); R^2 would be 10^4.
     assert calls["n"] <= 15 * len(q)
+
+
+def test_cell_of_equals_the_global_cell_and_neighbours():
+    from phd_swarm.core.partition import cell_of
+
+    rng = np.random.default_rng(21)
+    env = Environment(0.0, 0.0, 100.0, 100.0)
+    for trial in range(20):
+        q = rng.uniform(0, 100, (30, 2))
+        rho = rng.uniform(0, 8, 30) if trial % 2 else None
+        part = partition(env, q, rho)
+        for r in range(30):
+            poly, nbrs = cell_of(env, r, q, rho)
+            assert np.array_equal(poly, part.cells[r])
+            assert np.array_equal(nbrs, part.neighbours[r])

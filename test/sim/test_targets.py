@@ -1,0 +1,251 @@
+"""Tests for the true target populations (Dames Sec. IV-A/B, Chen Sec. 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from phd_swarm.core.grid import Environment
+from phd_swarm.core.models import BoundaryBirth
+from phd_swarm.sim.scenario import chen_clustered, dames_moving, dames_static
+from phd_swarm.sim.targets import (
+    ClusteredWalkers,
+    DamesWalkers,
+    StaticTargets,
+    boundary_ring_area,
+    make_targets,
+    reflect_into,
+    sample_boundary_ring,
+    substeps_per_step,
+)
+
+E = Environment(0.0, 0.0, 100.0, 100.0)
+DRAW = (-10.0, -10.0, 110.0, 110.0)
+DAMES_BIRTH = BoundaryBirth(density=5.26e-5, margin=5.0)
+
+
+# --- static ---------------------------------------------------------------------------------
+
+def test_static_targets_are_inside_the_map_with_consecutive_ids():
+    t = StaticTargets.sample(np.random.default_rng(0), E, 30, DRAW)
+    assert np.all(E.contains(t.positions))
+    assert np.array_equal(t.ids, np.arange(len(t.ids)))
+    before = t.positions.copy()
+    rng = np.random.default_rng(1)
+    state = rng.bit_generator.state
+    t.step(rng, 0.5)
+    assert np.array_equal(t.positions, before)
+    assert rng.bit_generator.state == state  # static targets consume no randomness
+
+
+def test_static_mean_count_is_the_area_fraction():
+    # Kept count ~ Binomial(30, (100/120)^2): mean 20.83, sd 2.04 (paper: 20.0 over 10
+    # trials). The mean of 2000 seeds has sd 0.046.
+    counts = [len(StaticTargets.sample(np.random.default_rng(s), E, 30, DRAW).ids)
+              for s in range(2000)]
+    assert np.mean(counts) == pytest.approx(30 * (100 / 120) ** 2, abs=0.2)
+
+
+def test_static_positions_cannot_be_written():
+    t = StaticTargets.sample(np.random.default_rng(0), E, 5, DRAW)
+    with pytest.raises(ValueError):
+        t.positions[0, 0] = 1.0
+
+
+# --- Dames walkers --------------------------------------------------------------------------
+
+def test_substeps_per_step():
+    assert substeps_per_step(0.5, 10.0) == 5
+    with pytest.raises(ValueError, match="whole number"):
+        substeps_per_step(0.5, 3.0)
+
+
+def test_walkers_move_exactly_a_tenth_of_a_metre_per_substep():
+    # Start in the middle so that no target leaves in one step, no births.
+    rng = np.random.default_rng(3)
+    p0 = 40.0 + 20.0 * rng.random((50, 2))
+    h0 = 2 * np.pi * rng.random(50)
+    w = DamesWalkers(E, p0, h0, speed=1.0, heading_sd=0.1, heading_rate=10.0)
+    # Reproduce the sub-steps by hand from the same stream.
+    check = np.random.default_rng(4)
+    dtheta = 0.1 * check.standard_normal((50, 5))
+    w.step(np.random.default_rng(4), 0.5)
+    h = h0.copy()
+    p = p0.copy()
+    for s in range(5):
+        h = h + dtheta[:, s]
+        step = 0.1 * np.stack([np.cos(h), np.sin(h)], axis=1)
+        assert np.allclose(np.linalg.norm(step, axis=1), 0.1, rtol=0, atol=1e-15)
+        p = p + step
+    assert np.allclose(w.positions, p, rtol=0, atol=1e-12)
+    assert np.allclose(w.headings, h, rtol=0, atol=1e-12)
+    # Net displacement <= 0.5 m (5 x 0.1 m) and close to it for small heading changes.
+    disp = np.linalg.norm(w.positions - p0, axis=1)
+    assert np.all(disp <= 0.5 + 1e-12) and np.all(disp > 0.45)
+
+
+def test_zero_heading_noise_moves_in_a_straight_line():
+    w = DamesWalkers(E, [[50.0, 50.0]], [np.pi / 2], heading_sd=0.0)
+    for _ in range(10):
+        w.step(np.random.default_rng(0), 0.5)
+    assert np.allclose(w.positions, [[50.0, 55.0]], atol=1e-12)
+
+
+def test_targets_leaving_the_map_are_removed_for_good():
+    # Target 0 heads out through x = 0 within one step; target 1 stays inside.
+    w = DamesWalkers(E, [[0.2, 50.0], [50.0, 50.0]], [np.pi, 0.0], heading_sd=0.0)
+    w.step(np.random.default_rng(0), 0.5)
+    assert w.ids.tolist() == [1]
+    assert np.all(E.contains(w.positions))
+
+
+class _ScriptedNormals:
+    """Stands in for a Generator: returns the given heading changes."""
+
+    def __init__(self, normals):
+        self.normals = np.asarray(normals, dtype=float)
+
+    def standard_normal(self, shape):
+        assert shape == self.normals.shape
+        return self.normals
+
+
+def test_a_target_that_exits_and_re_enters_within_a_step_is_removed():
+    # Sub-step 1 turns it to heading pi (x: 0.05 -> -0.05, outside E), sub-step 2 turns it
+    # back to 0 (x -> 0.05), and it ends at x = 0.35 inside E: it left, so it is removed.
+    w = DamesWalkers(E, [[0.05, 50.0], [50.0, 50.0]], [0.0, 0.0], heading_sd=1.0)
+    w.step(_ScriptedNormals([[np.pi, -np.pi, 0, 0, 0], [0, 0, 0, 0, 0]]), 0.5)
+    assert w.ids.tolist() == [1]
+    assert np.allclose(w.positions, [[50.5, 50.0]])
+
+
+def test_birth_rate_and_positions_match_the_birth_phd():
+    # Eq. 14: 5.26e-5 per m^2 on the 1900 m^2 ring, 0.0999 births per step.
+    w = DamesWalkers(E, np.empty((0, 2)), np.empty(0), birth=DAMES_BIRTH)
+    assert w.expected_births == pytest.approx(5.26e-5 * 1900)
+    rng = np.random.default_rng(7)
+    births = []
+    birth_positions = []
+    seen = set()
+    for _ in range(20000):
+        before = set(w.ids.tolist())
+        w.step(rng, 0.5)
+        new = [i for i in w.ids.tolist() if i not in before]
+        assert not (set(new) & seen)  # never reused
+        seen |= set(new)
+        births.append(len(new))
+        mask = np.isin(w.ids, new)
+        birth_positions.append(w.positions[mask])
+        assert len(np.unique(w.ids)) == len(w.ids)
+    # Poisson mean 0.0999: the mean of 20000 steps has sd 0.00224; allow 4 sd.
+    assert np.mean(births) == pytest.approx(0.0999, abs=0.009)
+    assert np.var(births) == pytest.approx(0.0999, abs=0.015)
+    z = np.concatenate(birth_positions)
+    assert len(z) > 1500
+    assert np.all(E.contains(z))
+    assert np.all(E.distance_to_boundary(z) <= 5.0)
+
+
+def test_ids_increase_and_are_never_reused():
+    w = DamesWalkers.sample(np.random.default_rng(1), E, 20, birth=DAMES_BIRTH)
+    rng = np.random.default_rng(2)
+    all_ids: set[int] = set(w.ids.tolist())
+    alive_sets = []
+    for _ in range(1000):
+        w.step(rng, 0.5)
+        ids = w.ids.tolist()
+        assert len(set(ids)) == len(ids)
+        assert ids == sorted(ids)
+        alive_sets.append(set(ids))
+        all_ids |= set(ids)
+    # An id that disappeared never comes back.
+    for k in range(1, len(alive_sets)):
+        gone = alive_sets[k - 1] - alive_sets[k]
+        assert not any(gone & s for s in alive_sets[k:])
+    assert max(all_ids) == len(all_ids) - 1  # ids handed out consecutively
+
+
+def test_ring_sampling_is_uniform_on_the_ring():
+    u = np.random.default_rng(0).random((200000, 3))
+    z = sample_boundary_ring(u, E, 5.0)
+    assert np.all(E.distance_to_boundary(z) <= 5.0) and np.all(E.contains(z))
+    # Uniform on the ring: each 5 x 5 m corner square holds 25/1900 of the points.
+    corner = (z[:, 0] <= 5) & (z[:, 1] <= 5)
+    assert corner.mean() == pytest.approx(25 / 1900, rel=0.05)
+    bottom_mid = (z[:, 1] <= 5) & (z[:, 0] > 5) & (z[:, 0] < 95)
+    assert bottom_mid.mean() == pytest.approx(450 / 1900, rel=0.02)
+
+
+def test_ring_area_covers_small_maps():
+    assert boundary_ring_area(E, 5.0) == pytest.approx(1900.0)
+    assert boundary_ring_area(Environment(0, 0, 8, 20), 5.0) == pytest.approx(160.0)
+    z = sample_boundary_ring(np.random.default_rng(0).random((1000, 3)),
+                             Environment(0, 0, 8, 20), 5.0)
+    assert np.all(Environment(0, 0, 8, 20).contains(z))
+
+
+def test_walker_step_rejects_fractional_substeps():
+    w = DamesWalkers(E, [[50.0, 50.0]], [0.0])
+    with pytest.raises(ValueError, match="whole number"):
+        w.step(np.random.default_rng(0), 0.25)
+
+
+# --- clustered walkers ----------------------------------------------------------------------
+
+BOXES = ((0.0, 0.0, 33.0, 33.0), (67.0, 67.0, 100.0, 100.0))
+
+
+def test_clustered_counts_boxes_and_speed_cap():
+    w = ClusteredWalkers.sample(np.random.default_rng(0), BOXES, (30, 30), step_sd=1.0,
+                                max_speed=3.0)
+    assert len(w.ids) == 60 and np.bincount(w.cluster).tolist() == [30, 30]
+    lo, hi = w.boxes[:, :2], w.boxes[:, 2:]
+    rng = np.random.default_rng(1)
+    for _ in range(2000):
+        before = w.positions.copy()
+        w.step(rng, 0.5)
+        assert np.all(w.positions >= lo) and np.all(w.positions <= hi)
+        assert np.all(np.linalg.norm(w.positions - before, axis=1) <= 1.5 + 1e-12)
+    assert w.ids.tolist() == list(range(60))
+
+
+def test_clustered_cap_binds_for_large_steps():
+    w = ClusteredWalkers([[50.0, 50.0]], [[0, 0, 100, 100]], step_sd=100.0, max_speed=3.0)
+    w.step(np.random.default_rng(0), 0.5)
+    assert np.linalg.norm(w.positions[0] - [50.0, 50.0]) == pytest.approx(1.5)
+
+
+def test_clustered_step_sd_sets_the_spread():
+    # Far from the edges and with no cap, a step is N(0, (step_sd dt)^2 I).
+    w = ClusteredWalkers(np.full((20000, 2), 50.0), np.tile([0, 0, 100, 100], (20000, 1)),
+                         step_sd=1.0, max_speed=1e9)
+    w.step(np.random.default_rng(5), 0.5)
+    assert np.allclose(w.positions.std(axis=0), 0.5, atol=0.01)
+
+
+def test_reflection_folds_back_into_the_box():
+    lo, hi = np.array([0.0, 0.0]), np.array([10.0, 10.0])
+    x = np.array([[-1.0, 11.5], [5.0, 25.0], [10.0, 0.0]])
+    assert np.allclose(reflect_into(x, lo, hi), [[1.0, 8.5], [5.0, 5.0], [10.0, 0.0]])
+
+
+# --- factory --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("preset, kind", [(dames_static, StaticTargets),
+                                          (dames_moving, DamesWalkers),
+                                          (chen_clustered, ClusteredWalkers)])
+def test_make_targets_builds_the_preset_population(preset, kind):
+    t = make_targets(np.random.default_rng(0), preset())
+    assert isinstance(t, kind)
+    if kind is DamesWalkers:
+        assert len(t.ids) == 20
+        assert t.expected_births == pytest.approx(5.26e-5 * 1900)
+    if kind is ClusteredWalkers:
+        assert len(t.ids) == 60
+
+
+def test_make_targets_without_birth():
+    s = dames_moving()
+    s = s.with_overrides(targets=s.targets.__class__(kind="dames_walk", count=5, birth=False))
+    t = make_targets(np.random.default_rng(0), s)
+    assert t.expected_births == 0.0
