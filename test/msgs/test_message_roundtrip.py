@@ -32,9 +32,12 @@ def _points(n: int, scale: float) -> list[Point]:
 
 EXAMPLES = [
     RobotState(header=_header(1), robot_id=7, step=1, position=Point(x=12.5, y=-3.25),
-               power_weight=2.75),
+               power_weight=2.75, cell_radius=14.125),
     CellPolygon(header=_header(2), robot_id=3, step=2, generator=Point(x=1.0, y=2.0),
-                power_weight=0.5, vertices=_points(5, 3.3), neighbour_ids=[0, 4, 19]),
+                power_weight=0.5, vertices=_points(5, 3.3), neighbour_ids=[0, 4, 19],
+                contact_ids=[0, 4, 19, 22], contact_positions=_points(4, 2.5),
+                contact_power_weights=[0.0, 1.5, 0.25, 5.0],
+                contact_cell_radii=[3.0, 7.5, 11.0, 0.0]),
     MeasurementSet(header=_header(3), robot_id=4294967294, step=3,
                    sensor_position=Point(x=50.0, y=50.0), measurements=_points(4, 0.7)),
     MeasurementSet(header=_header(4), robot_id=0, step=4, sensor_position=Point(x=0.0, y=0.0),

@@ -1,0 +1,828 @@
+"""One robot of the distributed grid PHD filter (Dames 2020 Sec. III) as a state machine.
+
+The robot never calls a transport: :meth:`RobotFilter.start_step`, :meth:`receive`,
+:meth:`advance` and :meth:`tick` take messages in and return :class:`Envelope` s addressed to
+robots. One step ``t`` runs these phases:
+
+1. ``STATES`` (Alg. 1 line 1): send the state (q, rho) to the contact set K, wait for
+   theirs. K is the 2-hop neighbourhood of the previous partition (neighbours and their
+   neighbours, learnt from the cells they shared), so a robot exchanges O(neighbours)
+   messages, independent of the team size.
+2. ``CELLS`` (Alg. 1 lines 2-3): compute the own power/Voronoi cell from the contacts'
+   states, send it (with the neighbour ids) to K, wait for theirs.
+3. ``TRANSFERS`` (Alg. 1 lines 4-7): hand the bins of the previous cell that now belong to
+   another robot to that robot (a transfer, possibly empty, to every contact: Alg. 1 sends
+   to the neighbours only, but a moving cell can pass bins to a neighbour's neighbour);
+   bins arrive from the contacts likewise.
+4. ``PHANTOMS`` (Sec. III-B): predict (eq. 3) over the own bins expanded by the support of
+   the motion kernel; the phantom mass that lands on other robots' bins is sent to them (a
+   transfer, possibly empty, to every contact whose cell lies within the kernel's reach).
+   Skipped for static targets (identity kernel).
+5. ``UPDATE`` (Alg. 2): send the own measurement set to the robots owning bins in its field
+   of view; then apply every measurement set whose field of view meets the own bins, in
+   increasing robot id: send the partial eta sums over the own bins to the active robot,
+   which adds the clutter term to the partials (in robot-id order) and returns the totals;
+   every robot involved then updates its own bins (eq. 4). A field of view inside the own
+   cell (Remark 1) involves nobody else and sends nothing.
+
+Ownership of a bin is the canonical rule of :func:`phd_swarm.core.partition.assign_bins`
+(lowest power distance, lowest id on ties) over the robot and its contacts, so all robots
+agree on it without a global view. Every sum that combines several robots' numbers is taken
+in robot-id order, so the result does not depend on the order messages arrive in.
+
+The contact set K for the next step is symmetric and built from numbers both sides hold:
+the neighbours and their neighbours, plus every robot among the contacts and the contacts'
+contacts (each cell message relays the sender's table of states) that is close enough to
+matter for a cell, a field of view or phantom mass, with a margin for one step of motion
+(:meth:`FilterContext.are_contacts`). A cell that a contact's contact would have cut is
+counted in ``stats['cell_mismatch']``. At the
+start the team's configuration is known to all once (:meth:`RobotFilter.initialise`).
+A field-of-view bin outside every known cell would mean an unknown robot owns it; that is
+counted in ``stats['uncovered_fov_bins']`` (zero in every test run).
+
+Failures: every wait counts :meth:`tick` s (rounds without progress); after
+``timeout_ticks`` the robots that did not answer are declared dead, dropped from every set,
+and the step goes on with what arrived. Bins that a robot owns but nobody handed to it (those
+of a dead robot) are re-initialised to the prior mass ``models.initial_density *
+bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from collections import defaultdict
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..cumulative import cumulative_update
+from ..grid import Grid
+from ..models import PhdModels
+from ..partition import assign_bins, cell_of, partition, points_in_polygon
+from ..phd_grid import eta_partial, eta_total, fov_positions, psi, spread, update_weights
+from .messages import (
+    CellMsg,
+    Envelope,
+    EtaPartialMsg,
+    EtaTotalMsg,
+    Message,
+    ScanMsg,
+    StateMsg,
+    TransferKind,
+    TransferMsg,
+    sender_of,
+)
+
+_log = logging.getLogger("phd_swarm.protocol")
+
+
+class ProtocolError(RuntimeError):
+    """An invariant of the distributed filter was violated (a bug or inconsistent views)."""
+
+
+class Phase(enum.Enum):
+    """Where a robot is within a step."""
+
+    IDLE = "idle"
+    STATES = "states"
+    CELLS = "cells"
+    TRANSFERS = "transfers"
+    PHANTOMS = "phantoms"
+    UPDATE = "update"
+    DONE = "done"
+
+
+@dataclass(frozen=True, eq=False)
+class FilterContext:
+    """What every robot of a team shares: the grid, the models and derived per-bin arrays.
+
+    Attributes
+    ----------
+    grid : Grid
+        The shared grid of bins.
+    models : PhdModels
+        The filter's models.
+    cumulative : bool
+        Carry Chen's cumulative state (alpha, n) with the bins.
+    timeout_ticks : int
+        Rounds without progress before a silent robot is declared dead.
+    max_step : float
+        Largest distance a robot moves in one step [m] (max speed x dt); sets the margin
+        of the contact set.
+    """
+
+    grid: Grid
+    models: PhdModels
+    cumulative: bool = False
+    timeout_ticks: int = 3
+    max_step: float = 0.0
+
+    @cached_property
+    def kernel(self) -> np.ndarray:
+        """Motion kernel on the grid."""
+        return self.models.motion.kernel(self.grid.resolution)
+
+    @cached_property
+    def survival(self) -> np.ndarray:
+        """p_s per bin, shape (size,)."""
+        return self.models.survival.probability(self.grid)
+
+    @cached_property
+    def birth(self) -> np.ndarray:
+        """Birth mass per bin, shape (size,)."""
+        return self.models.birth.mass(self.grid)
+
+    @property
+    def prior_mass(self) -> float:
+        """Initial mass of one bin."""
+        return self.models.initial_density * self.grid.bin_area
+
+    @cached_property
+    def reach(self) -> float:
+        """How far phantom mass can land from the bins it left [m]."""
+        half = (self.kernel.shape[0] // 2) * self.grid.resolution
+        return half * np.sqrt(2.0) + self.grid.resolution
+
+    @property
+    def contact_margin(self) -> float:
+        """Slack for one step of motion of both robots and their cells [m]."""
+        return 2.0 * self.max_step + self.grid.resolution * np.sqrt(2.0)
+
+    def are_contacts(self, q_a: np.ndarray, rho_a: float, radius_a: float,
+                     q_b: np.ndarray, rho_b: float, radius_b: float) -> bool:
+        """Whether robots a and b must exchange messages next step (symmetric in a and b).
+
+        Evaluated by both robots on the same numbers (positions and power weights of this
+        step, cell radii of the previous one, as sent in the states), so both agree. With
+        R_a, R_b the cell radii (largest generator-to-vertex distances), the pair is kept
+        when ``|q_a - q_b| <= 2 max(R_a, R_b) + rho_a + rho_b + max(fov, reach) + margin``:
+        this covers power/Voronoi neighbours (a neighbour of a lies within 2 R_a + rho of
+        q_a), a field of view meeting the other's cell (within R + fov) and phantom mass or
+        bin hand-overs between cells within the kernel's reach, with the margin for the
+        next move of both robots and the change of the cell radii.
+        """
+        d = float(np.hypot(q_a[0] - q_b[0], q_a[1] - q_b[1]))
+        bound = (2.0 * max(radius_a, radius_b) + rho_a + rho_b
+                 + max(self.models.detection.radius, self.reach) + 2.0 * self.contact_margin)
+        return d <= bound
+
+
+@dataclass
+class _StepData:
+    """Per-step scratch of a robot."""
+
+    step: int
+    position: np.ndarray
+    power_weight: float
+    z: np.ndarray
+    radius: float = 0.0
+    ids: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    positions: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    weights: np.ndarray = field(default_factory=lambda: np.empty(0))
+    cell: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    neighbours: tuple[int, ...] = ()
+    cells: dict[int, tuple[np.ndarray, tuple[int, ...]]] = field(default_factory=dict)
+    generators: dict[int, np.ndarray] = field(default_factory=dict)
+    owned: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    transfer_peers: set[int] = field(default_factory=set)
+    phantom_peers: set[int] = field(default_factory=set)
+    own_spread: np.ndarray | None = None
+    scan_peers: set[int] = field(default_factory=set)
+    pending: list[int] = field(default_factory=list)
+    partial_sent: set[int] = field(default_factory=set)
+
+
+class RobotFilter:
+    """The distributed-filter state of robot ``robot_id`` and its protocol.
+
+    Attributes (read them between steps)
+    ------------------------------------
+    bins : np.ndarray of int64, shape (K,)
+        Ascending flat indices of the bins this robot owns.
+    weights : np.ndarray, shape (K,)
+        Their PHD masses.
+    alpha, count : np.ndarray, shape (K,) or None
+        Chen's cumulative state of those bins (count = n = 1/beta), when enabled.
+    cell : np.ndarray, shape (V, 2)
+        Current cell polygon.
+    neighbours : tuple of int
+        Ids of the robots whose cells touch this one.
+    contacts : tuple of int
+        Ids this robot exchanges states and cells with at the next step (2-hop).
+    dead : set of int
+        Robots declared dead.
+    stats : dict
+        Counters: ``orphan_bins``, ``timeouts``, ``dropped`` (stale or unknown messages).
+    """
+
+    def __init__(self, robot_id: int, ctx: FilterContext) -> None:
+        self.robot_id = int(robot_id)
+        self.ctx = ctx
+        self.bins = np.empty(0, dtype=np.int64)
+        self.weights = np.empty(0)
+        self.alpha: np.ndarray | None = None
+        self.count: np.ndarray | None = None
+        self.cell = np.empty((0, 2))
+        self.cell_radius = 0.0
+        self.neighbours: tuple[int, ...] = ()
+        self.contacts: tuple[int, ...] = ()
+        self.dead: set[int] = set()
+        self.phase = Phase.IDLE
+        self.stats: dict[str, int] = defaultdict(int)
+        self._last_step = -1
+        self._cur: _StepData | None = None
+        self._mail: dict[tuple, dict[int, Message]] = defaultdict(dict)
+        self._idle_ticks = 0
+
+    # ------------------------------------------------------------------ set-up
+    def initialise(self, ids: np.ndarray, positions: np.ndarray,
+                   power_weights: np.ndarray | None = None) -> None:
+        """Start from the team's known initial configuration (every robot knows it once).
+
+        Computes the initial partition, takes the own bins with the prior mass, and sets
+        the neighbours and the 2-hop contacts for step 0. After this, only neighbour
+        traffic is used.
+        """
+        ids = np.asarray(ids, dtype=np.int64)
+        order = np.argsort(ids, kind="stable")
+        ids, positions = ids[order], np.asarray(positions, dtype=float)[order]
+        rho = None if power_weights is None else np.asarray(power_weights, float)[order]
+        if len(np.unique(ids)) != len(ids):
+            raise ValueError(f"robot ids must be unique, got {ids.tolist()}")
+        if self.robot_id not in ids:
+            raise ValueError(f"robot {self.robot_id} is not among the team ids {ids.tolist()}")
+        part = partition(self.ctx.grid.env, positions, rho)
+        me = int(np.searchsorted(ids, self.robot_id))
+        rho_all = np.zeros(len(ids)) if rho is None else rho
+        radii = np.array([_cell_radius(positions[j], part.cells[j]) for j in range(len(ids))])
+        self.cell = np.asarray(part.cells[me])
+        self.cell_radius = float(radii[me])
+        self.neighbours = tuple(int(ids[j]) for j in part.neighbours[me])
+        two_hop = set(self.neighbours)
+        for j in part.neighbours[me]:
+            two_hop.update(int(ids[k]) for k in part.neighbours[j])
+        for j, rid in enumerate(ids):
+            if self.ctx.are_contacts(positions[me], rho_all[me], radii[me], positions[j],
+                                     rho_all[j], radii[j]):
+                two_hop.add(int(rid))
+        two_hop.discard(self.robot_id)
+        self.contacts = tuple(sorted(two_hop))
+        self.bins = self._owned_bins(self.cell, ids, positions,
+                                     np.zeros(len(ids)) if rho is None else rho)
+        self.weights = np.full(self.bins.size, self.ctx.prior_mass)
+        if self.ctx.cumulative:
+            self.alpha = np.zeros(self.bins.size)
+            self.count = np.zeros(self.bins.size)
+
+    # --------------------------------------------------------------- interface
+    @property
+    def done(self) -> bool:
+        """Whether the current step is finished (or no step has started)."""
+        return self.phase in (Phase.DONE, Phase.IDLE)
+
+    @property
+    def step(self) -> int:
+        """Index of the last step started (-1 before the first)."""
+        return self._last_step
+
+    def start_step(self, step: int, position: np.ndarray, power_weight: float,
+                   z: np.ndarray) -> list[Envelope]:
+        """Begin step ``step`` at ``position`` with this robot's measurement set ``z``."""
+        if not self.done:
+            raise ProtocolError(f"robot {self.robot_id}: step {step} started while step "
+                                f"{self._last_step} is in phase {self.phase.value}")
+        if step <= self._last_step:
+            raise ProtocolError(f"robot {self.robot_id}: step {step} is not after "
+                                f"{self._last_step}")
+        position = np.asarray(position, dtype=float).reshape(2)
+        z = np.asarray(z, dtype=float).reshape(-1, 2)
+        if not (np.all(np.isfinite(position)) and np.all(np.isfinite(z))
+                and np.isfinite(power_weight) and power_weight >= 0):
+            raise ValueError(f"robot {self.robot_id}: non-finite position, measurement or "
+                             f"power weight at step {step}")
+        self._last_step = step
+        self._cur = _StepData(step=step, position=position, power_weight=float(power_weight),
+                              z=z)
+        self._drop_stale(step)
+        self.phase = Phase.STATES
+        self._idle_ticks = 0
+        self._cur.radius = self.cell_radius
+        state = StateMsg(self.robot_id, step, position, float(power_weight), self.cell_radius)
+        out = [self._to(c, state) for c in self.contacts]
+        return out + self.advance()
+
+    def receive(self, msg: Message) -> None:
+        """Buffer an incoming message; call :meth:`advance` to act on it."""
+        step = msg.step
+        if step < self._last_step or (self._cur is not None and step == self._last_step
+                                      and self.phase == Phase.DONE):
+            self.stats["dropped"] += 1
+            return
+        src = sender_of(msg)
+        if src in self.dead or src == self.robot_id:
+            self.stats["dropped"] += 1
+            return
+        self._mail[_mail_key(msg)][src] = msg
+
+    def advance(self) -> list[Envelope]:
+        """Make as much progress as the buffered messages allow; returns what to send."""
+        out: list[Envelope] = []
+        while self._cur is not None:
+            before = (self.phase, len(self._cur.pending), len(self._cur.partial_sent))
+            out.extend(self._progress())
+            if (self.phase, len(self._cur.pending), len(self._cur.partial_sent)) == before:
+                break
+            self._idle_ticks = 0
+        return out
+
+    def tick(self) -> list[Envelope]:
+        """One round passed without progress anywhere; time out silent peers if it is due."""
+        if self.done or self._cur is None:
+            return []
+        self._idle_ticks += 1
+        if self._idle_ticks < self.ctx.timeout_ticks:
+            return []
+        self._idle_ticks = 0
+        missing = self._missing()
+        if missing:
+            self.stats["timeouts"] += 1
+            _log.warning("robot %d: no answer from %s in phase %s of step %d after %d "
+                         "rounds; declared dead", self.robot_id, sorted(missing),
+                         self.phase.value, self._last_step, self.ctx.timeout_ticks)
+            self._declare_dead(missing)
+        return self.advance()
+
+    # ----------------------------------------------------------------- phases
+    def _progress(self) -> list[Envelope]:
+        cur = self._cur
+        assert cur is not None
+        if self.phase == Phase.STATES:
+            if self._missing():
+                return []
+            return self._compute_cell()
+        if self.phase == Phase.CELLS:
+            if self._missing():
+                return []
+            return self._hand_over_bins()
+        if self.phase == Phase.TRANSFERS:
+            if self._missing():
+                return []
+            self._take_over_bins()
+            return self._predict()
+        if self.phase == Phase.PHANTOMS:
+            if self._missing():
+                return []
+            self._add_phantoms()
+            return self._start_update()
+        if self.phase == Phase.UPDATE:
+            return self._update_next()
+        return []
+
+    def _missing(self) -> set[int]:
+        """Peers the current wait still needs to hear from (empty if not waiting)."""
+        cur = self._cur
+        assert cur is not None
+        step = cur.step
+        if self.phase == Phase.STATES:
+            return set(self.contacts) - set(self._mail[(step, "state")])
+        if self.phase == Phase.CELLS:
+            return set(self.contacts) - set(self._mail[(step, "cell")])
+        if self.phase == Phase.TRANSFERS:
+            return cur.transfer_peers - set(self._mail[(step, "own")])
+        if self.phase == Phase.PHANTOMS:
+            return cur.phantom_peers - set(self._mail[(step, "phantom")])
+        if self.phase == Phase.UPDATE and cur.pending:
+            j = cur.pending[0]
+            if j != self.robot_id:
+                if j not in self._mail[(step, "scan")]:
+                    return {j}
+                z = self._mail[(step, "scan")][j].z
+                if len(z) and j not in self._mail[(step, "total", j)]:
+                    return {j}
+                return set()
+            if len(cur.z) == 0:
+                return set()
+            return (cur.scan_peers - {self.robot_id}) - set(self._mail[(step, "partial",
+                                                                          self.robot_id)])
+        return set()
+
+    def _compute_cell(self) -> list[Envelope]:
+        cur = self._cur
+        assert cur is not None
+        states = self._mail[(cur.step, "state")]
+        ids = np.array(sorted(set(states) | {self.robot_id}), dtype=np.int64)
+        pos = np.array([cur.position if i == self.robot_id else states[i].position
+                        for i in ids], dtype=float).reshape(-1, 2)
+        rho = np.array([cur.power_weight if i == self.robot_id else states[i].power_weight
+                        for i in ids], dtype=float)
+        me = int(np.searchsorted(ids, self.robot_id))
+        poly, rows = cell_of(self.ctx.grid.env, me, pos, rho)
+        cur.ids, cur.positions, cur.weights = ids, pos, rho
+        cur.cell = poly
+        cur.neighbours = tuple(int(ids[r]) for r in rows)
+        self.phase = Phase.CELLS
+        table = [states[i] for i in sorted(states)]
+        msg = CellMsg(self.robot_id, cur.step, cur.position, cur.power_weight, poly,
+                      cur.neighbours, tuple(m.robot_id for m in table),
+                      np.array([m.position for m in table], dtype=float).reshape(-1, 2),
+                      np.array([m.power_weight for m in table], dtype=float),
+                      np.array([m.cell_radius for m in table], dtype=float))
+        return [self._to(c, msg) for c in self.contacts]
+
+    def _hand_over_bins(self) -> list[Envelope]:
+        """Alg. 1 lines 4-7: bins of the previous cell that a neighbour now owns go to it."""
+        cur = self._cur
+        assert cur is not None
+        for src, msg in self._mail[(cur.step, "cell")].items():
+            cur.cells[src] = (np.asarray(msg.vertices).reshape(-1, 2),
+                              tuple(msg.neighbour_ids))
+            cur.generators[src] = np.asarray(msg.generator, dtype=float)
+        self._check_cell()
+        cur.owned = self._owned_bins(cur.cell, cur.ids, cur.positions, cur.weights)
+        leaving = ~_isin_sorted(self.bins, cur.owned)
+        # Alg. 1 sends to the neighbours N(r) only, which assumes that the previous cell
+        # overlaps only current neighbours; with moving cells a bin can go to a robot that
+        # was and is only a neighbour's neighbour, so transfers go to every contact.
+        cur.transfer_peers = set(self.contacts) - self.dead
+        out_bins: dict[int, np.ndarray] = {}
+        if leaving.any():
+            idx = np.flatnonzero(leaving)
+            owner_rows = assign_bins(self.ctx.grid.centres_of(self.bins[idx]),
+                                     cur.positions, cur.weights)
+            owners = cur.ids[owner_rows]
+            for dst in np.unique(owners):
+                dst = int(dst)
+                if dst == self.robot_id:
+                    raise ProtocolError(f"robot {self.robot_id}: a bin it does not own maps "
+                                        f"back to it at step {cur.step}")
+                if dst not in cur.transfer_peers:
+                    raise ProtocolError(
+                        f"robot {self.robot_id}: bins of its previous cell belong to robot "
+                        f"{dst}, which is not among its contacts (step {cur.step}): robots "
+                        f"moved too far in one step for the 2-hop contact set")
+                out_bins[dst] = idx[owners == dst]
+        out = []
+        cum = self.ctx.cumulative
+        for dst in sorted(cur.transfer_peers):
+            sel = out_bins.get(dst, np.empty(0, dtype=np.int64))
+            out.append(self._to(dst, TransferMsg(
+                self.robot_id, dst, cur.step, TransferKind.OWNERSHIP, self.bins[sel],
+                self.weights[sel], self.alpha[sel] if cum else None,
+                self.count[sel] if cum else None)))
+        keep = ~leaving
+        self._retained = (self.bins[keep], self.weights[keep],
+                          self.alpha[keep] if cum else None, self.count[keep] if cum else None)
+        self.phase = Phase.TRANSFERS
+        return out
+
+    def _take_over_bins(self) -> None:
+        cur = self._cur
+        assert cur is not None
+        owned = cur.owned
+        w = np.full(owned.size, np.nan)
+        cum = self.ctx.cumulative
+        alpha = np.zeros(owned.size) if cum else None
+        count = np.zeros(owned.size) if cum else None
+        parts = [self._retained]
+        for src in sorted(self._mail[(cur.step, "own")]):
+            msg = self._mail[(cur.step, "own")][src]
+            parts.append((np.asarray(msg.bins, dtype=np.int64), np.asarray(msg.weights),
+                          None if msg.alpha is None else np.asarray(msg.alpha),
+                          None if msg.count is None else np.asarray(msg.count)))
+        for bins, weights, a, n in parts:
+            if bins.size == 0:
+                continue
+            pos = np.searchsorted(owned, bins)
+            ok = (pos < owned.size) & (owned[np.minimum(pos, owned.size - 1)] == bins)
+            if not ok.all():
+                raise ProtocolError(f"robot {self.robot_id}: received {int((~ok).sum())} "
+                                    f"bins it does not own at step {cur.step}")
+            w[pos] = weights
+            if cum and a is not None and n is not None:
+                alpha[pos] = a
+                count[pos] = n
+        orphans = np.isnan(w)
+        if orphans.any():
+            self.stats["orphan_bins"] += int(orphans.sum())
+            _log.warning("robot %d: %d bins it now owns were handed over by nobody (a dead "
+                         "owner) at step %d; re-initialised to the prior mass %.3g",
+                         self.robot_id, int(orphans.sum()), cur.step, self.ctx.prior_mass)
+            w[orphans] = self.ctx.prior_mass
+        self.bins, self.weights, self.alpha, self.count = owned, w, alpha, count
+        self.cell = cur.cell
+        self._retained = None
+
+    def _predict(self) -> list[Envelope]:
+        """Eq. 3 over the own bins; phantom mass for other robots' bins goes to them."""
+        cur = self._cur
+        assert cur is not None
+        ctx = self.ctx
+        mass = ctx.survival[self.bins] * self.weights
+        if ctx.kernel.shape == (1, 1):
+            self.weights = mass + ctx.birth[self.bins]
+            return self._start_update()
+        flat, moved = spread(ctx.grid, self.bins, mass, ctx.kernel)
+        mine = _isin_sorted(flat, self.bins)
+        own = np.zeros(self.bins.size)
+        own[np.searchsorted(self.bins, flat[mine])] = moved[mine]
+        cur.own_spread = own
+        cur.phantom_peers = self._phantom_peers()
+        others = ~mine & (moved > 0)
+        out_bins: dict[int, np.ndarray] = {}
+        if others.any():
+            idx = np.flatnonzero(others)
+            rows = assign_bins(ctx.grid.centres_of(flat[idx]), cur.positions, cur.weights)
+            owners = cur.ids[rows]
+            for dst in np.unique(owners):
+                dst = int(dst)
+                if dst not in cur.phantom_peers:
+                    raise ProtocolError(
+                        f"robot {self.robot_id}: phantom mass for robot {dst}, whose cell is "
+                        f"not within the motion kernel's reach (step {cur.step})")
+                out_bins[dst] = idx[owners == dst]
+        out = []
+        for dst in sorted(cur.phantom_peers):
+            sel = out_bins.get(dst, np.empty(0, dtype=np.int64))
+            out.append(self._to(dst, TransferMsg(self.robot_id, dst, cur.step,
+                                                 TransferKind.PHANTOM, flat[sel], moved[sel])))
+        self.phase = Phase.PHANTOMS
+        return out
+
+    def _phantom_peers(self) -> set[int]:
+        """Contacts whose cells come within the motion kernel's reach of the own cell."""
+        cur = self._cur
+        assert cur is not None
+        peers = set()
+        for rid, (poly, _) in cur.cells.items():
+            if rid in self.dead or len(poly) == 0 or len(cur.cell) == 0:
+                continue
+            if _polygon_distance(cur.cell, poly) <= self.ctx.reach:
+                peers.add(rid)
+        return peers
+
+    def _add_phantoms(self) -> None:
+        cur = self._cur
+        assert cur is not None
+        w = cur.own_spread
+        assert w is not None
+        for src in sorted(self._mail[(cur.step, "phantom")]):
+            msg = self._mail[(cur.step, "phantom")][src]
+            bins = np.asarray(msg.bins, dtype=np.int64)
+            if bins.size == 0:
+                continue
+            pos = np.searchsorted(self.bins, bins)
+            ok = (pos < self.bins.size) & (self.bins[np.minimum(pos, self.bins.size - 1)]
+                                           == bins)
+            if not ok.all():
+                raise ProtocolError(f"robot {self.robot_id}: phantom mass from {src} for "
+                                    f"{int((~ok).sum())} bins it does not own")
+            np.add.at(w, pos, np.asarray(msg.weights))
+        self.weights = w + self.ctx.birth[self.bins]
+
+    def _start_update(self) -> list[Envelope]:
+        """Alg. 2 lines 4-8: exchange measurement sets, list the updates to take part in."""
+        cur = self._cur
+        assert cur is not None
+        grid, radius = self.ctx.grid, self.ctx.models.detection.radius
+        fov = grid.disk_bins(cur.position, radius)
+        owners = set()
+        if fov.size:
+            owners = {int(i) for i in np.unique(cur.ids[assign_bins(
+                grid.centres_of(fov), cur.positions, cur.weights)])}
+        cur.scan_peers = owners - self.dead
+        if fov.size:
+            self._check_coverage(grid.centres_of(fov))
+        out = [self._to(dst, ScanMsg(self.robot_id, cur.step, cur.position, cur.z))
+               for dst in sorted(cur.scan_peers - {self.robot_id})]
+        pending = set()
+        if self.bins.size:
+            for rid, q in zip(cur.ids, cur.positions, strict=True):
+                rid = int(rid)
+                if rid not in self.dead and fov_positions(grid, self.ctx.models, self.bins,
+                                                          q).size:
+                    pending.add(rid)
+        # The active robot coordinates its own update even without bins in its field of
+        # view (a power cell need not contain its generator).
+        if len(cur.z) and cur.scan_peers - {self.robot_id}:
+            pending.add(self.robot_id)
+        cur.pending = sorted(pending)
+        self.phase = Phase.UPDATE
+        return out + self._update_next()
+
+    def _update_next(self) -> list[Envelope]:
+        """Alg. 2 lines 9-26 for the lowest pending active id, as far as messages allow."""
+        cur = self._cur
+        assert cur is not None
+        out: list[Envelope] = []
+        while cur.pending:
+            j = cur.pending[0]
+            if j == self.robot_id:
+                sensor, z = cur.position, cur.z
+            else:
+                scan = self._mail[(cur.step, "scan")].get(j)
+                if scan is None:
+                    return out
+                sensor, z = np.asarray(scan.sensor), np.asarray(scan.z).reshape(-1, 2)
+            grid, models = self.ctx.grid, self.ctx.models
+            pos = fov_positions(grid, models, self.bins, sensor)
+            centres = grid.centres_of(self.bins[pos])
+            psi_zx = psi(models, centres, z, sensor)
+            if len(z) == 0:
+                eta = np.empty(0)
+            elif j == self.robot_id:
+                partials = self._mail[(cur.step, "partial", j)]
+                if (cur.scan_peers - {j}) - set(partials):
+                    return out
+                mine = eta_partial(psi_zx, self.weights[pos])
+                ordered = [mine if k == j else np.asarray(partials[k].values)
+                           for k in sorted(set(partials) | {j})]
+                eta = eta_total(ordered, models.clutter.intensity(z))
+                out.extend(self._to(k, EtaTotalMsg(j, cur.step, eta))
+                           for k in sorted(cur.scan_peers - {j}))
+            else:
+                if j not in cur.partial_sent:
+                    cur.partial_sent.add(j)
+                    out.append(self._to(j, EtaPartialMsg(
+                        self.robot_id, j, cur.step, eta_partial(psi_zx, self.weights[pos]))))
+                total = self._mail[(cur.step, "total", j)].get(j)
+                if total is None:
+                    return out
+                eta = np.asarray(total.values)
+                if eta.shape != (len(z),):
+                    raise ProtocolError(f"robot {self.robot_id}: eta totals of robot {j} "
+                                        f"have {eta.shape} values for {len(z)} measurements")
+            pd = models.detection.probability(centres, sensor)
+            self.weights[pos] = update_weights(self.weights[pos], pd, psi_zx, eta)
+            if self.ctx.cumulative:
+                self.alpha, self.count = cumulative_update(self.alpha, self.count, pos,
+                                                           len(z) > 0)
+            cur.pending.pop(0)
+        self._finish_step()
+        return out
+
+    def _finish_step(self) -> None:
+        cur = self._cur
+        assert cur is not None
+        self.neighbours = tuple(n for n in cur.neighbours if n not in self.dead)
+        two_hop = set(self.neighbours)
+        for n in self.neighbours:
+            two_hop.update(cur.cells.get(n, (None, ()))[1])
+        for rid, (q, rho, radius) in self._known_states().items():
+            if self.ctx.are_contacts(cur.position, cur.power_weight, cur.radius, q, rho,
+                                     radius):
+                two_hop.add(rid)
+        two_hop.discard(self.robot_id)
+        self.contacts = tuple(sorted(two_hop - self.dead))
+        self.cell_radius = _cell_radius(cur.position, cur.cell)
+        self.phase = Phase.DONE
+        self._drop_stale(cur.step + 1)
+
+    # ----------------------------------------------------------------- helpers
+    def _known_states(self) -> dict[int, tuple[np.ndarray, float, float]]:
+        """(position, rho, cell radius) of the contacts and of their contacts, this step."""
+        cur = self._cur
+        assert cur is not None
+        known: dict[int, tuple[np.ndarray, float, float]] = {}
+        for msg in self._mail[(cur.step, "cell")].values():
+            for i, rid in enumerate(msg.contact_ids):
+                known[int(rid)] = (np.asarray(msg.contact_positions[i], dtype=float),
+                                   float(msg.contact_power_weights[i]),
+                                   float(msg.contact_cell_radii[i]))
+        for rid, msg in self._mail[(cur.step, "state")].items():
+            known[rid] = (np.asarray(msg.position, dtype=float), float(msg.power_weight),
+                          float(msg.cell_radius))
+        known.pop(self.robot_id, None)
+        for rid in self.dead:
+            known.pop(rid, None)
+        return known
+
+    def _check_cell(self) -> None:
+        """Count a cell that the contacts' contacts would cut (a missed neighbour)."""
+        cur = self._cur
+        assert cur is not None
+        known = self._known_states()
+        extra = sorted(set(known) - set(int(i) for i in cur.ids))
+        if not extra or len(cur.cell) == 0:
+            return
+        ids = np.array(sorted(set(int(i) for i in cur.ids) | set(extra)), dtype=np.int64)
+        pos = np.array([cur.position if i == self.robot_id else known[i][0] for i in ids])
+        rho = np.array([cur.power_weight if i == self.robot_id else known[i][1] for i in ids])
+        poly, _ = cell_of(self.ctx.grid.env, int(np.searchsorted(ids, self.robot_id)), pos,
+                          rho)
+        if poly.shape != cur.cell.shape or not np.allclose(poly, cur.cell, atol=1e-9):
+            self.stats["cell_mismatch"] += 1
+            _log.warning("robot %d: its cell at step %d misses a neighbour known only to "
+                         "its contacts", self.robot_id, cur.step)
+
+    def _declare_dead(self, ids: set[int]) -> None:
+        self.dead |= ids
+        cur = self._cur
+        self.contacts = tuple(c for c in self.contacts if c not in ids)
+        self.neighbours = tuple(n for n in self.neighbours if n not in ids)
+        if cur is None:
+            return
+        cur.transfer_peers -= ids
+        cur.phantom_peers -= ids
+        cur.scan_peers -= ids
+        if self.phase == Phase.UPDATE and cur.pending and cur.pending[0] in ids:
+            cur.pending.pop(0)
+        cur.pending = [j for j in cur.pending if j not in ids]
+
+    def _check_coverage(self, points: np.ndarray) -> None:
+        """Count field-of-view bins outside every known cell (an unknown robot owns them)."""
+        cur = self._cur
+        assert cur is not None
+        tol = 1e-9 * (self.ctx.grid.env.width + self.ctx.grid.env.height)
+        covered = points_in_polygon(points, cur.cell, tol) if len(cur.cell) else \
+            np.zeros(len(points), dtype=bool)
+        for rid, (poly, _) in cur.cells.items():
+            if covered.all():
+                return
+            if rid not in self.dead and len(poly):
+                covered |= points_in_polygon(points, poly, tol)
+        if not covered.all():
+            self.stats["uncovered_fov_bins"] += int((~covered).sum())
+            _log.warning("robot %d: %d field-of-view bins lie in no known cell at step %d",
+                         self.robot_id, int((~covered).sum()), cur.step)
+
+    def _owned_bins(self, cell: np.ndarray, ids: np.ndarray, positions: np.ndarray,
+                    rho: np.ndarray) -> np.ndarray:
+        """Ascending flat indices of the bins this robot owns among the given generators."""
+        grid = self.ctx.grid
+        if len(cell) == 0:
+            return np.empty(0, dtype=np.int64)
+        lo = cell.min(axis=0) - grid.resolution
+        hi = cell.max(axis=0) + grid.resolution
+        env, res = grid.env, grid.resolution
+        ix0 = max(int(np.floor((lo[0] - env.xmin) / res)), 0)
+        ix1 = min(int(np.ceil((hi[0] - env.xmin) / res)), grid.nx - 1)
+        iy0 = max(int(np.floor((lo[1] - env.ymin) / res)), 0)
+        iy1 = min(int(np.ceil((hi[1] - env.ymin) / res)), grid.ny - 1)
+        iy, ix = np.meshgrid(np.arange(iy0, iy1 + 1), np.arange(ix0, ix1 + 1), indexing="ij")
+        flat = (iy * grid.nx + ix).ravel()
+        rows = assign_bins(grid.centres_of(flat), positions, rho)
+        me = int(np.searchsorted(ids, self.robot_id))
+        return flat[rows == me]
+
+    def _to(self, dst: int, msg: Message) -> Envelope:
+        return Envelope(self.robot_id, int(dst), msg)
+
+    def _drop_stale(self, step: int) -> None:
+        for key in [k for k in self._mail if k[0] < step]:
+            del self._mail[key]
+
+
+def _mail_key(msg: Message) -> tuple:
+    if isinstance(msg, StateMsg):
+        return (msg.step, "state")
+    if isinstance(msg, CellMsg):
+        return (msg.step, "cell")
+    if isinstance(msg, ScanMsg):
+        return (msg.step, "scan")
+    if isinstance(msg, EtaPartialMsg):
+        return (msg.step, "partial", msg.active_id)
+    if isinstance(msg, EtaTotalMsg):
+        return (msg.step, "total", msg.active_id)
+    if isinstance(msg, TransferMsg):
+        kind = "own" if msg.kind == TransferKind.OWNERSHIP else "phantom"
+        return (msg.step, kind)
+    raise TypeError(f"not a protocol message: {type(msg).__name__}")
+
+
+def _cell_radius(q: np.ndarray, cell: np.ndarray) -> float:
+    """Largest distance from q to a vertex of ``cell`` [m] (0 for an empty cell)."""
+    if len(cell) == 0:
+        return 0.0
+    return float(np.sqrt(((np.asarray(cell) - np.asarray(q)[None, :2]) ** 2).sum(axis=1).max()))
+
+
+def _isin_sorted(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
+    """Membership of ``values`` in the ascending array ``sorted_set``."""
+    if sorted_set.size == 0:
+        return np.zeros(values.shape, dtype=bool)
+    pos = np.minimum(np.searchsorted(sorted_set, values), sorted_set.size - 1)
+    return sorted_set[pos] == values
+
+
+def _polygon_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance between two convex polygons [m] (0 if they touch or overlap)."""
+    if points_in_polygon(a, b, tol=1e-9).any() or points_in_polygon(b, a, tol=1e-9).any():
+        return 0.0
+    return min(_points_to_edges(a, b), _points_to_edges(b, a))
+
+
+def _points_to_edges(points: np.ndarray, poly: np.ndarray) -> float:
+    """Smallest distance from ``points`` (P, 2) to the edges of ``poly`` (V, 2)."""
+    p0 = poly
+    p1 = np.roll(poly, -1, axis=0)
+    d = p1 - p0
+    len2 = np.maximum((d * d).sum(axis=1), 1e-300)
+    rel = points[:, None, :] - p0[None, :, :]
+    t = np.clip((rel * d[None]).sum(axis=2) / len2, 0.0, 1.0)
+    closest = p0[None] + t[..., None] * d[None]
+    return float(np.sqrt(((points[:, None, :] - closest) ** 2).sum(axis=2).min()))
+
+
+__all__ = ["FilterContext", "Phase", "ProtocolError", "RobotFilter"]

@@ -1,0 +1,207 @@
+"""The in-memory engine: R robots running the distributed protocol against the world.
+
+Every message goes through one queue; with ``delivery_seed`` set, the next message to deliver
+is drawn at random from everything in flight, so tests can show that the result does not
+depend on arrival order. The engine counts, per step and per receiving robot, the messages
+and (estimated CDR) bytes of each type. It is the ROS-free twin of the ROS stack and the
+fast engine of parameter sweeps.
+
+One step k:
+
+1. the world gives each live robot its measurement set Z^k at its position q^k;
+2. the robots run one protocol step (:class:`phd_swarm.core.protocol.robot.RobotFilter`),
+   messages being delivered until every live robot is done (rounds without progress are
+   :meth:`RobotFilter.tick` s, which time out dead peers);
+3. each robot's controller picks its goal and next power weight;
+4. the world moves the robots toward their goals and the targets, to step k+1.
+
+With ``reference=True`` a :class:`CentralPhdFilter` is fed the same measurement sets in
+robot-id order, for the equivalence tests.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict, deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.controller import ControllerConfig, decide
+from phd_swarm.core.protocol.messages import Envelope, TransferKind, TransferMsg
+from phd_swarm.core.protocol.robot import FilterContext, RobotFilter
+from phd_swarm.core.scan import Scan
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.world import World
+
+
+class DeadlockError(RuntimeError):
+    """No robot can make progress and no timeout can help: a protocol bug."""
+
+
+def message_type(env: Envelope) -> str:
+    """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart)."""
+    msg = env.msg
+    if isinstance(msg, TransferMsg):
+        return "ParticleTransfer" if msg.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
+    return {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "ScanMsg": "MeasurementSet",
+            "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}[type(msg).__name__]
+
+
+@dataclass
+class StepTraffic:
+    """Messages and bytes received by each robot during one step, by type."""
+
+    messages: dict[int, Counter] = field(default_factory=lambda: defaultdict(Counter))
+    bytes: dict[int, Counter] = field(default_factory=lambda: defaultdict(Counter))
+    lost: int = 0
+
+
+class InMemoryEngine:
+    """Run a scenario with the distributed filter, message by message, in one process.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Map, models, team, targets, duration, seed.
+    controller : ControllerConfig or str
+        Controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``) or full config.
+    delivery_seed : int, optional
+        Shuffle the delivery order with this seed (None: first in, first out).
+    reference : bool
+        Also run the centralised reference filter on the same measurement sets.
+    timeout_ticks : int
+        Rounds without progress before a robot declares a silent peer dead.
+    """
+
+    def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd",
+                 delivery_seed: int | None = None, reference: bool = False,
+                 timeout_ticks: int = 3) -> None:
+        self.scenario = scenario
+        if isinstance(controller, str):
+            controller = ControllerConfig(kind=controller,
+                                          rho_max=scenario.models.detection.radius)
+        self.controller = controller
+        self.grid = scenario.grid
+        self.world = World(scenario)
+        self.ctx = FilterContext(self.grid, scenario.models,
+                                 cumulative=controller.uses_cumulative,
+                                 timeout_ticks=timeout_ticks,
+                                 max_step=scenario.robot_max_speed * scenario.dt)
+        ids = self.world.robot_ids
+        self.robots = {int(i): RobotFilter(int(i), self.ctx) for i in ids}
+        positions = self.world.robot_positions
+        for robot in self.robots.values():
+            robot.initialise(ids, positions)
+        self.power_weights = {int(i): 0.0 for i in ids}
+        self.killed: set[int] = set()
+        self.central = CentralPhdFilter(self.grid, scenario.models) if reference else None
+        self._rng = None if delivery_seed is None else np.random.default_rng(delivery_seed)
+        self.traffic: list[StepTraffic] = []
+        self.last_scans: dict[int, np.ndarray] = {}
+
+    # ------------------------------------------------------------------ control
+    @property
+    def step_index(self) -> int:
+        """Index of the next step to run."""
+        return self.world.step_index
+
+    def kill(self, robot_id: int) -> None:
+        """Stop a robot: it no longer scans, moves, sends or receives."""
+        self.killed.add(int(robot_id))
+        self.world.kill(int(robot_id))
+
+    def live_ids(self) -> list[int]:
+        """Ids of the robots not killed, ascending."""
+        return [i for i in sorted(self.robots) if i not in self.killed]
+
+    def step(self) -> None:
+        """Run one full step (scan, protocol, control, world motion)."""
+        k = self.world.step_index
+        scans = self.world.scans()
+        positions = dict(zip(self.world.robot_ids.tolist(), self.world.robot_positions,
+                             strict=True))
+        traffic = StepTraffic()
+        queue: list[Envelope] = []
+        for rid in self.live_ids():
+            z = scans.get(rid, np.empty((0, 2)))
+            queue.extend(self.robots[rid].start_step(k, positions[rid], self.power_weights[rid],
+                                                      z))
+        self._deliver(queue, traffic)
+        self.traffic.append(traffic)
+        goals = {}
+        for rid in self.live_ids():
+            robot = self.robots[rid]
+            z = scans.get(rid, np.empty((0, 2)))
+            d = decide(self.controller, self.grid, positions[rid], robot.cell, robot.bins,
+                       robot.weights, len(z) > 0, robot.alpha, robot.count)
+            goals[rid] = d.goal
+            self.power_weights[rid] = d.power_weight
+        self.last_scans = scans
+        if self.central is not None:
+            self.central.step([Scan(rid, k, positions[rid], scans[rid])
+                               for rid in sorted(scans)])
+        self.world.apply_goals(goals)
+        self.world.advance()
+
+    def run(self, steps: int | None = None) -> None:
+        """Run ``steps`` steps (default: the rest of the scenario)."""
+        n = self.scenario.steps - self.world.step_index if steps is None else steps
+        for _ in range(n):
+            self.step()
+
+    def _deliver(self, initial: list[Envelope], traffic: StepTraffic) -> None:
+        fifo: deque[Envelope] = deque(initial)
+        pool: list[Envelope] = []
+        if self._rng is not None:
+            pool, fifo = list(fifo), deque()
+        stalls = 0
+        limit = 4 * self.ctx.timeout_ticks + 8
+        while True:
+            while fifo or pool:
+                if self._rng is None:
+                    env = fifo.popleft()
+                else:
+                    i = int(self._rng.integers(len(pool)))
+                    pool[i], pool[-1] = pool[-1], pool[i]
+                    env = pool.pop()
+                if env.dst in self.killed or env.src in self.killed:
+                    traffic.lost += 1
+                    continue
+                kind = message_type(env)
+                traffic.messages[env.dst][kind] += 1
+                traffic.bytes[env.dst][kind] += env.msg.wire_size()
+                robot = self.robots[env.dst]
+                robot.receive(env.msg)
+                (fifo if self._rng is None else pool).extend(robot.advance())
+            waiting = [rid for rid in self.live_ids() if not self.robots[rid].done]
+            if not waiting:
+                return
+            stalls += 1
+            if stalls > limit:
+                phases = {rid: self.robots[rid].phase.value for rid in waiting}
+                raise DeadlockError(f"step {self.world.step_index}: robots still waiting after "
+                                    f"{limit} rounds without progress: {phases}")
+            for rid in waiting:
+                (fifo if self._rng is None else pool).extend(self.robots[rid].tick())
+
+    # -------------------------------------------------------------- observation
+    def team_weights(self) -> np.ndarray:
+        """The team PHD as an image (ny, nx): the union of the live robots' bins."""
+        img = np.zeros(self.grid.size)
+        for rid in self.live_ids():
+            robot = self.robots[rid]
+            img[robot.bins] += robot.weights
+        return img.reshape(self.grid.shape)
+
+    def ownership_counts(self) -> np.ndarray:
+        """How many live robots own each bin, shape (size,); a partition gives all ones."""
+        counts = np.zeros(self.grid.size, dtype=np.int64)
+        for rid in self.live_ids():
+            np.add.at(counts, self.robots[rid].bins, 1)
+        return counts
+
+    def messages_per_robot(self, step: int = -1) -> dict[int, int]:
+        """Messages received by each live robot in a step."""
+        t = self.traffic[step]
+        return {rid: sum(t.messages[rid].values()) for rid in self.live_ids()}
