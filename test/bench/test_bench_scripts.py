@@ -29,3 +29,18 @@ def test_bench_rejects_unknown_suite():
                             capture_output=True, text=True, timeout=120, check=False)
     assert result.returncode == 2
     assert "usage" in result.stderr
+
+
+def test_bench_comms_quick_reports_traffic_per_team_size(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "comms", "--quick",
+                             "--sizes", "4,8", "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(next(tmp_path.glob("comms-*.json")).read_text())
+    rows = {r["robots"]: r for r in data["results"]}
+    assert set(rows) == {4, 8}
+    for r in rows.values():
+        assert r["messages_per_robot_per_step"] > 0
+        assert r["by_type_per_robot_per_step"]["RobotState"] > 0
+        # A robot never hears from more robots than the team has, per message type.
+        assert r["by_type_per_robot_per_step"]["RobotState"] <= r["robots"] - 1
