@@ -184,7 +184,7 @@ class _StepData:
     cell: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
     neighbours: tuple[int, ...] = ()
     cells: dict[int, tuple[np.ndarray, tuple[int, ...]]] = field(default_factory=dict)
-    generators: dict[int, np.ndarray] = field(default_factory=dict)
+    known: dict[int, tuple[np.ndarray, float, float]] | None = None
     owned: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
     transfer_peers: set[int] = field(default_factory=set)
     phantom_peers: set[int] = field(default_factory=set)
@@ -438,7 +438,6 @@ class RobotFilter:
         for src, msg in self._mail[(cur.step, "cell")].items():
             cur.cells[src] = (np.asarray(msg.vertices).reshape(-1, 2),
                               tuple(msg.neighbour_ids))
-            cur.generators[src] = np.asarray(msg.generator, dtype=float)
         self._check_cell()
         cur.owned = self._owned_bins(cur.cell, cur.ids, cur.positions, cur.weights)
         leaving = ~_isin_sorted(self.bins, cur.owned)
@@ -555,10 +554,18 @@ class RobotFilter:
         cur = self._cur
         assert cur is not None
         peers = set()
+        if len(cur.cell) == 0:
+            return peers
+        lo, hi = cur.cell.min(axis=0), cur.cell.max(axis=0)
+        reach = self.ctx.reach
         for rid, (poly, _) in cur.cells.items():
-            if rid in self.dead or len(poly) == 0 or len(cur.cell) == 0:
+            if rid in self.dead or len(poly) == 0:
                 continue
-            if _polygon_distance(cur.cell, poly) <= self.ctx.reach:
+            # Bounding boxes further apart than the reach cannot hold closer polygons.
+            gap = np.maximum(np.maximum(poly.min(axis=0) - hi, lo - poly.max(axis=0)), 0.0)
+            if np.hypot(gap[0], gap[1]) > reach:
+                continue
+            if _polygon_distance(cur.cell, poly) <= reach:
                 peers.add(rid)
         return peers
 
@@ -684,6 +691,8 @@ class RobotFilter:
         """(position, rho, cell radius) of the contacts and of their contacts, this step."""
         cur = self._cur
         assert cur is not None
+        if cur.known is not None:
+            return cur.known
         known: dict[int, tuple[np.ndarray, float, float]] = {}
         for msg in self._mail[(cur.step, "cell")].values():
             for i, rid in enumerate(msg.contact_ids):
@@ -696,6 +705,7 @@ class RobotFilter:
         known.pop(self.robot_id, None)
         for rid in self.dead:
             known.pop(rid, None)
+        cur.known = known
         return known
 
     def _check_cell(self) -> None:
@@ -737,11 +747,15 @@ class RobotFilter:
         tol = 1e-9 * (self.ctx.grid.env.width + self.ctx.grid.env.height)
         covered = points_in_polygon(points, cur.cell, tol) if len(cur.cell) else \
             np.zeros(len(points), dtype=bool)
+        lo, hi = points.min(axis=0), points.max(axis=0)
         for rid, (poly, _) in cur.cells.items():
             if covered.all():
                 return
-            if rid not in self.dead and len(poly):
-                covered |= points_in_polygon(points, poly, tol)
+            if rid in self.dead or len(poly) == 0:
+                continue
+            if np.any(poly.min(axis=0) > hi) or np.any(poly.max(axis=0) < lo):
+                continue
+            covered[~covered] = points_in_polygon(points[~covered], poly, tol)
         if not covered.all():
             self.stats["uncovered_fov_bins"] += int((~covered).sum())
             _log.warning("robot %d: %d field-of-view bins lie in no known cell at step %d",
