@@ -16,15 +16,12 @@ Writes ``bench/results/comms-<date>.json``.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
-import json
-import os
-import platform
 import time
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
+from results_io import machine_meta, write_results
 
 from phd_swarm.core.grid import Environment
 from phd_swarm.sim import scenario as sc
@@ -97,9 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     warmup, steps = (3, 5) if args.quick else (args.warmup, args.steps)
     sizes = [int(s) for s in args.sizes.split(",")]
     results = [measure(r, warmup, steps, args.seed) for r in sizes]
-    meta = {"date": dt.date.today().isoformat(), "machine": platform.machine(),
-            "cpus": os.cpu_count(), "python": platform.python_version(),
-            "warmup": warmup, "steps": steps}
+    meta = machine_meta(warmup=warmup, steps=steps)
     print(f"comms benchmark {meta['date']} ({meta['cpus']} cpus); received per robot per step")
     print(f"{'robots':>6} {'map m':>6} {'targets':>7} {'msgs':>7} {'msgs p95':>8} "
           f"{'interior':>13} {'kB':>7} {'steps/s':>8}")
@@ -115,10 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     for r in results:
         row = r["by_type_per_robot_per_step"]
         print(f"{r['robots']:>6} " + " ".join(f"{row.get(k, 0.0):>7.2f}" for k in kinds))
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / f"comms-{meta['date']}.json"
-    path.write_text(json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
-    print(f"wrote {path}")
+    write_results(args.out, "comms", meta, results)
     return 0
 
 

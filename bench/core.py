@@ -16,15 +16,12 @@ Figures are medians (and 90th percentiles) over repeated runs, in milliseconds.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
-import json
-import os
-import platform
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from results_io import machine_meta, write_results
 
 from phd_swarm.core.central import CentralPhdFilter
 from phd_swarm.core.grid import Environment, Grid
@@ -108,17 +105,12 @@ def main(argv: list[str] | None = None) -> int:
         bench_partition(0.1, max(3, n // 4)),
         bench_ospa(n * 10),
     ]
-    meta = {"date": dt.date.today().isoformat(), "machine": platform.machine(),
-            "cpus": os.cpu_count(), "python": platform.python_version(),
-            "numpy": np.__version__}
+    meta = machine_meta()
     print(f"core benchmark {meta['date']} ({meta['cpus']} cpus, {meta['machine']})")
     print(f"{'case':<48} {'median ms':>10} {'p90 ms':>10}")
     for r in results:
         print(f"{r['case']:<48} {r['median_ms']:>10.2f} {r['p90_ms']:>10.2f}")
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / f"core-{meta['date']}.json"
-    path.write_text(json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
-    print(f"wrote {path}")
+    write_results(args.out, "core", meta, results)
     return 0
 
 
