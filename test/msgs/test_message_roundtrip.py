@@ -18,7 +18,10 @@ from phd_swarm_msgs.msg import (
     MeasurementSet,
     ParticleTransfer,
     RobotState,
+    RobotStatus,
     TargetSet,
+    TeamMetrics,
+    TeamState,
 )
 
 
@@ -54,6 +57,16 @@ EXAMPLES = [
                 data=[0.0, 1e-4, math.pi, 1.0 / 3.0, 7.5e-12, 0.05]),
     TargetSet(header=_header(9), source_id=0xFFFFFFFF, step=9, ids=[3, 1, 2],
               positions=_points(3, 10.0), expected_cardinality=2.875),
+    TeamState(header=_header(10), step=10, robot_ids=[0, 1, 5], positions=_points(3, 1.5),
+              alive=[True, False, True]),
+    RobotStatus(header=_header(11), state=RobotStatus.STATE_STEP_DONE, robot_id=5, step=11,
+                goal=Point(x=3.5, y=99.0), power_weight=1.25, owned_bins=812, mass=2.5e-3,
+                messages_received=61, messages_sent=58, rejected_messages=2,
+                dropped_messages=1, timeouts=1, orphan_bins=40, dead_ids=[3]),
+    TeamMetrics(header=_header(12), step=12, ospa=4.25, ospa_localisation=1.0,
+                ospa_cardinality=3.25, ospa_c=10.0, ospa_p=1.0, cardinality_true=30,
+                cardinality_estimated=27, expected_cardinality=28.5, robots_alive=19,
+                robots_reported=19, messages_per_robot=55.5),
 ]
 
 

@@ -1,0 +1,124 @@
+"""The parameters of every phd_swarm node: name, default, description, range (rclpy-free).
+
+Nodes declare these with :func:`phd_swarm.nodes.params.declare` (type, description and range
+become the ROS parameter descriptor, so ``ros2 param describe`` shows them); the run-config
+loader (:mod:`phd_swarm.config`) checks a YAML file against the same table before any process
+starts, so a typo or an out-of-range value fails fast with the file and key in the message.
+The scenario itself is declared as read-only ``scenario.*`` parameters on every node
+(:mod:`phd_swarm.config`).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One node parameter; its type is the type of ``default``.
+
+    ``low``/``high`` bound numbers (inclusive), ``choices`` lists allowed strings.
+    """
+
+    name: str
+    default: Any
+    description: str
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    read_only: bool = True
+
+    def check(self, value: Any, where: str) -> Any:
+        """Return ``value`` converted to the spec's type, or raise ValueError naming ``where``."""
+        kind = type(self.default)
+        if kind is bool:
+            ok = isinstance(value, bool)
+        elif kind is int:
+            ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
+        elif kind is float:
+            ok = (isinstance(value, numbers.Real) and not isinstance(value, bool)
+                  and math.isfinite(float(value)))
+        else:
+            ok = isinstance(value, kind)
+        if not ok:
+            raise ValueError(f"{where}: {self.name}: expected {kind.__name__}, got {value!r}")
+        value = kind(value)
+        if self.low is not None and value < self.low:
+            raise ValueError(f"{where}: {self.name}: must be >= {self.low}, got {value!r}")
+        if self.high is not None and value > self.high:
+            raise ValueError(f"{where}: {self.name}: must be <= {self.high}, got {value!r}")
+        if self.choices and value not in self.choices:
+            raise ValueError(f"{where}: {self.name}: must be one of {list(self.choices)}, "
+                             f"got {value!r}")
+        return value
+
+
+#: Parameters every node has (the ``/**`` block of a config file), besides ``scenario.*``.
+SHARED = (
+    ParamSpec("world_frame_id", "map", "Frame id of the world (REP 105) in every header."),
+)
+
+WORLD = (
+    ParamSpec("mode", "lockstep", "lockstep: step k+1 starts when every live robot reported "
+              "step k (or timed out); realtime: steps at a fixed rate regardless.",
+              choices=("lockstep", "realtime")),
+    ParamSpec("step_timeout", 15.0, "Lockstep: wall seconds to wait for a robot's report "
+              "before it counts as dead [s].", low=0.1, high=3600.0),
+    ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for every robot (and observer) to "
+              "be ready before step 0 [s].", low=0.1, high=3600.0),
+    ParamSpec("observers", 0, "Number of observer nodes (monitor, recorder) that must have "
+              "matched /world/truth before step 0.", low=0, high=64),
+    ParamSpec("realtime_factor", 1.0, "Realtime: sim seconds per wall second.",
+              low=0.01, high=1000.0),
+    ParamSpec("publish_markers", True, "Publish /world/markers (robots, fields of view, "
+              "targets)."),
+    ParamSpec("linger", 1.0, "Wall seconds to keep publishing after the last step so "
+              "observers receive it [s].", low=0.0, high=60.0),
+)
+
+ROBOT = (
+    ParamSpec("robot_id", -1, "Id of this robot in the team (0..robots-1); required.",
+              low=-1, high=1_000_000),
+    ParamSpec("controller", "phd", "Controller: phd (Lloyd with the PHD, Dames eq. 8), "
+              "uniform (coverage baseline), chen_p, chen_o (power diagram, Chen Sec. 3).",
+              choices=("phd", "uniform", "chen_p", "chen_o")),
+    ParamSpec("rho_max", 0.0, "Cap on the power weight rho for chen_* [m]; 0 uses the "
+              "sensing radius (docs/decisions.md).", low=0.0, high=1e6),
+    ParamSpec("cumulative_mode", "rate", "Chen eq. 11: rate (default) or literal reading "
+              "(docs/decisions.md).", choices=("rate", "literal")),
+    ParamSpec("tick_period", 1.0, "Wall seconds without any protocol message after which "
+              "one timeout round passes [s].", low=0.01, high=600.0),
+    ParamSpec("timeout_ticks", 5, "Rounds without an answer before a silent peer is "
+              "declared dead.", low=1, high=1000),
+    ParamSpec("observers", 0, "Number of observers that must have matched this robot's "
+              "status topic before it reports ready.", low=0, high=64),
+    ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for the team state and the "
+              "observers before giving up [s].", low=0.1, high=3600.0),
+    ParamSpec("publish_density", True, "Publish the local PHD window on density (the "
+              "monitor needs it)."),
+    ParamSpec("max_measurements", 10000, "Measurement sets with more entries are rejected "
+              "as absurd.", low=1, high=10_000_000),
+)
+
+MONITOR = (
+    ParamSpec("summary_path", "", "Where to write summary.json at the end ('' for none)."),
+    ParamSpec("progress_every", 10, "Log a progress line every this many steps (0: never).",
+              low=0, high=1_000_000),
+    ParamSpec("publish_density", True, "Publish the team PHD on /monitor/density."),
+    ParamSpec("publish_markers", True, "Publish /monitor/markers (cells, goals, estimates)."),
+    ParamSpec("exit_when_done", False, "Shut down after the last step of the scenario."),
+    ParamSpec("end_timeout", 30.0, "After the world stops, wall seconds to wait for the last "
+              "grids before finishing with what arrived [s].", low=0.0, high=3600.0),
+)
+
+RECORDER = (
+    ParamSpec("output", "run.mcap", "Path of the MCAP file to write."),
+    ParamSpec("compression", "zstd", "Chunk compression.", choices=("zstd", "lz4", "none")),
+    ParamSpec("chunk_size", 1_048_576, "Chunk size [bytes].", low=1024, high=1 << 30),
+)
+
+#: Node key in a config file -> its parameters.
+NODES = {"world": WORLD, "robot": ROBOT, "monitor": MONITOR, "recorder": RECORDER}

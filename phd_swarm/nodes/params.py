@@ -1,0 +1,101 @@
+"""Declare a node's parameters from :mod:`phd_swarm.nodes.param_specs` and the scenario.
+
+Every parameter is declared with its description and range (``ros2 param describe`` shows
+them) and is read-only unless its spec says otherwise; values are checked again by the spec
+so that a bad value stops the node with a message naming the node and the parameter. The
+scenario is declared as read-only ``scenario.*`` parameters (dynamic typing, so ``120`` and
+``120.0`` are both accepted for a number) and validated by
+:func:`phd_swarm.sim.scenario.scenario_from_dict`.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from phd_swarm.config import flatten, scenario_to_dict, unflatten
+from phd_swarm.nodes.param_specs import ParamSpec
+from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
+
+
+class ParameterError(ValueError):
+    """A node parameter is missing, of the wrong type or out of range."""
+
+
+def _descriptor(spec: ParamSpec) -> ParameterDescriptor:
+    d = ParameterDescriptor(description=spec.description, read_only=spec.read_only)
+    if spec.choices:
+        d.additional_constraints = f"one of: {', '.join(spec.choices)}"
+    if isinstance(spec.default, bool):
+        return d
+    if isinstance(spec.default, int) and spec.low is not None and spec.high is not None:
+        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                        step=0)]
+    elif isinstance(spec.default, float) and spec.low is not None and spec.high is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                     to_value=float(spec.high), step=0.0)]
+    return d
+
+
+def declare(node: Node, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
+    """Declare ``specs`` on ``node`` and return their checked values by name.
+
+    Raises
+    ------
+    ParameterError
+        For a value of the wrong type, out of range or not among the choices; the message
+        names the node and the parameter.
+    """
+    where = f"node {node.get_fully_qualified_name()}"
+    out = {}
+    for spec in specs:
+        try:
+            value = node.declare_parameter(spec.name, spec.default,
+                                           _descriptor(spec)).value
+        except Exception as exc:  # rclpy raises several types for type / range violations
+            raise ParameterError(f"{where}: parameter {spec.name}: {exc}") from None
+        try:
+            out[spec.name] = spec.check(value, where)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
+    return out
+
+
+@cache
+def _scenario_keys() -> dict[str, dict[str, Any]]:
+    """Preset name -> its flattened scenario parameters."""
+    return {name: flatten(scenario_to_dict(make())) for name, make in PRESETS.items()}
+
+
+def declare_scenario(node: Node) -> Scenario:
+    """Declare the read-only ``scenario.*`` parameters and build the scenario from them."""
+    where = f"node {node.get_fully_qualified_name()} parameters scenario"
+    desc = ParameterDescriptor(read_only=True, description=(
+        "Scenario preset (dames_static, dames_moving, chen_clustered); the other scenario.* "
+        "parameters override it (docs/parameters.md)."))
+    preset = node.declare_parameter("scenario.preset", "dames_static", desc).value
+    keys = _scenario_keys()
+    if preset not in keys:
+        raise ParameterError(f"{where}.preset: unknown preset {preset!r}; expected one of "
+                             f"{sorted(keys)}")
+    names = sorted({k for flat in keys.values() for k in flat} - {"preset"})
+    defaults = keys[preset]
+    values: dict[str, Any] = {"preset": preset}
+    for name in names:
+        d = ParameterDescriptor(read_only=True, dynamic_typing=True,
+                                description=f"Scenario field {name} (docs/parameters.md).")
+        default = defaults.get(name)
+        if default is None:
+            p = node.declare_parameter(f"scenario.{name}", None, d)
+        else:
+            p = node.declare_parameter(f"scenario.{name}", default, d)
+        if p.type_ != Parameter.Type.NOT_SET:
+            values[name] = list(p.value) if isinstance(p.value, (list, tuple)) else p.value
+    try:
+        return scenario_from_dict(unflatten(values), where)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None

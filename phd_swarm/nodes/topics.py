@@ -1,0 +1,106 @@
+"""Every topic of a phd_swarm run: name, message type and QoS, in one table.
+
+World topics live under ``/world``, the monitor's under ``/monitor``, and each robot's
+under its namespace ``/robot_<id>`` (REP 144, DESIGN.md). Robot nodes use relative names
+inside their namespace; :func:`robot_topic` gives the absolute name for robot ``id`` (the
+world, the monitor, the recorder and peers address a robot's topics that way).
+
+Protocol traffic goes to the receiver's *inbox*: robot ``j`` publishes a message addressed
+to robot ``i`` on ``/robot_<i>/inbox/<kind>``, so a robot subscribes to six topics whatever
+the team size and receives exactly the messages addressed to it (O(neighbours) per step).
+Inbox topics are reliable and transient-local on the writer side with a short history, so
+that a message written by a publisher created a moment ago (a new contact) still reaches the
+inbox once the two match; readers keep a deep queue so a burst is never overwritten.
+
+The table is rclpy-free on purpose (QoS as names of :mod:`phd_swarm.nodes.qos` profiles) so
+that tools and docs can read it without ROS.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: Namespace prefix of robot ``i``: ``/robot_<i>``.
+ROBOT_PREFIX = "robot_"
+
+CLOCK = "/clock"
+WORLD_TRUTH = "/world/truth"
+WORLD_ROBOTS = "/world/robots"
+WORLD_MARKERS = "/world/markers"
+MONITOR_METRICS = "/monitor/metrics"
+MONITOR_ESTIMATES = "/monitor/estimates"
+MONITOR_DENSITY = "/monitor/density"
+MONITOR_MARKERS = "/monitor/markers"
+
+#: Inbox kinds and the message type each carries.
+INBOX = {
+    "state": "phd_swarm_msgs/msg/RobotState",
+    "cell": "phd_swarm_msgs/msg/CellPolygon",
+    "measurements": "phd_swarm_msgs/msg/MeasurementSet",
+    "eta_partial": "phd_swarm_msgs/msg/EtaPartial",
+    "eta_total": "phd_swarm_msgs/msg/EtaTotal",
+    "particles": "phd_swarm_msgs/msg/ParticleTransfer",
+}
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    """One topic: absolute name, ROS type (``pkg/msg/Type``), QoS profile name, who writes it.
+
+    ``qos`` names a profile of :mod:`phd_swarm.nodes.qos`; ``rate`` says how often it is
+    written (for docs/topics.md).
+    """
+
+    name: str
+    type: str
+    qos: str
+    publisher: str
+    rate: str
+
+
+def robot_namespace(robot_id: int) -> str:
+    """Namespace of robot ``robot_id``: ``/robot_<id>``."""
+    return f"/{ROBOT_PREFIX}{int(robot_id)}"
+
+
+def robot_topic(robot_id: int, relative: str) -> str:
+    """Absolute name of robot ``robot_id``'s topic ``relative`` (e.g. ``inbox/state``)."""
+    return f"{robot_namespace(robot_id)}/{relative}"
+
+
+#: Topics in every robot's namespace, by relative name: (type, QoS, writer, rate).
+ROBOT_TOPICS = {
+    "measurements": ("phd_swarm_msgs/msg/MeasurementSet", "STEP", "world", "once per step"),
+    "pose": ("geometry_msgs/msg/PoseStamped", "LATCHED", "world", "once per step"),
+    "goal": ("geometry_msgs/msg/PoseStamped", "LATCHED", "robot", "once per step"),
+    "status": ("phd_swarm_msgs/msg/RobotStatus", "STEP", "robot", "once per step"),
+    "cell": ("phd_swarm_msgs/msg/CellPolygon", "LATCHED", "robot", "once per step"),
+    "density": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot", "once per step"),
+    "estimates": ("phd_swarm_msgs/msg/TargetSet", "LATCHED", "robot", "once per step"),
+    **{f"inbox/{kind}": (typ, "INBOX", "peers", "per protocol step, from contacts")
+       for kind, typ in INBOX.items()},
+}
+
+#: Team-wide topics: (type, QoS, writer, rate).
+TEAM_TOPICS = {
+    CLOCK: ("rosgraph_msgs/msg/Clock", "CLOCK", "world", "once per step"),
+    WORLD_TRUTH: ("phd_swarm_msgs/msg/TargetSet", "STEP", "world", "once per step"),
+    WORLD_ROBOTS: ("phd_swarm_msgs/msg/TeamState", "LATCHED", "world", "once per step"),
+    WORLD_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "world",
+                    "once per step"),
+    MONITOR_METRICS: ("phd_swarm_msgs/msg/TeamMetrics", "STEP", "monitor", "once per step"),
+    MONITOR_ESTIMATES: ("phd_swarm_msgs/msg/TargetSet", "LATCHED", "monitor",
+                        "once per step"),
+    MONITOR_DENSITY: ("phd_swarm_msgs/msg/DensityGrid", "OBSERVATION", "monitor",
+                      "once per step (parameter publish_density)"),
+    MONITOR_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "monitor",
+                      "once per step"),
+}
+
+
+def run_topics(robot_ids: list[int] | range) -> list[TopicSpec]:
+    """Every topic of a run with robots ``robot_ids``, team topics first."""
+    out = [TopicSpec(name, *spec) for name, spec in TEAM_TOPICS.items()]
+    for rid in robot_ids:
+        out.extend(TopicSpec(robot_topic(rid, rel), *spec) for rel, spec in ROBOT_TOPICS.items())
+    return out
