@@ -118,6 +118,10 @@ RECORDER = (
     ParamSpec("output", "run.mcap", "Path of the MCAP file to write."),
     ParamSpec("compression", "zstd", "Chunk compression.", choices=("zstd", "lz4", "none")),
     ParamSpec("chunk_size", 1_048_576, "Chunk size [bytes].", low=1024, high=1 << 30),
+    ParamSpec("params_file", "", "Resolved run config (ROS parameter file): its scenario "
+              "gives the topics to subscribe at start, its text is stored as MCAP metadata."),
+    ParamSpec("discover", True, "Also poll the ROS graph and record new phd_swarm topics "
+              "(/clock, /world/*, /monitor/*, /robot_*/*) as they appear."),
 )
 
 #: Node key in a config file -> its parameters.
