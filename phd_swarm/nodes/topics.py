@@ -85,7 +85,8 @@ ROBOT_TOPICS = {
 TEAM_TOPICS = {
     CLOCK: ("rosgraph_msgs/msg/Clock", "CLOCK", "world", "once per step"),
     WORLD_TRUTH: ("phd_swarm_msgs/msg/TargetSet", "STEP", "world", "once per step"),
-    WORLD_ROBOTS: ("phd_swarm_msgs/msg/TeamState", "LATCHED", "world", "once per step"),
+    WORLD_ROBOTS: ("phd_swarm_msgs/msg/TeamState", "STEP", "world",
+                   "once per step, and once after the last"),
     WORLD_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "world",
                     "once per step"),
     MONITOR_METRICS: ("phd_swarm_msgs/msg/TeamMetrics", "STEP", "monitor", "once per step"),

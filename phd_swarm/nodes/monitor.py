@@ -1,0 +1,310 @@
+"""Team monitor: assembles the team PHD, extracts the team estimate, scores it with OSPA.
+
+An observer only: it subscribes to the world's truth and team state and to every robot's
+density window, status and cell, and never publishes anything a robot reads. For each step
+k, once the density windows of every robot alive at step k have arrived (a robot the world
+declared dead during step k is not waited for), it
+
+1. adds the windows into the team PHD image (each bin is owned by exactly one robot, so the
+   sum is the union of the robots' bins, exact in float64);
+2. extracts the team estimate (:func:`phd_swarm.core.extraction.extract_targets`, Dames
+   Sec. IV) and the expected number of targets (the total mass, Dames eq. 2);
+3. computes OSPA (c, p from the scenario; Dames eq. 12) against the truth of step k;
+4. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` and
+   ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
+
+After the scenario's last step it writes ``summary_path`` (DESIGN.md "Outputs of a run").
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+
+from phd_swarm.core.extraction import expected_cardinality, extract_targets
+from phd_swarm.core.ospa import ospa_components
+from phd_swarm.nodes import convert
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.markers import team_markers
+from phd_swarm.nodes.param_specs import MONITOR, SHARED
+from phd_swarm.nodes.params import declare, declare_scenario
+from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm_msgs.msg import (
+    CellPolygon,
+    DensityGrid,
+    RobotStatus,
+    TargetSet,
+    TeamMetrics,
+    TeamState,
+)
+from visualization_msgs.msg import MarkerArray
+
+
+class MonitorNode(Node):
+    """The team monitor (node ``monitor``); see the module docstring.
+
+    Parameters
+    ----------
+    keep_images : bool
+        Keep every step's team PHD image in :attr:`images` (for tests and tools).
+    **kwargs
+        Passed to :class:`rclpy.node.Node`.
+
+    Attributes
+    ----------
+    series : list of dict
+        Per processed step: step, t, ospa, parts, cardinalities, messages per robot.
+    images : dict of int to np.ndarray
+        Team PHD image (ny, nx) per step, when ``keep_images``.
+    finished : bool
+        True after the last step was processed (and the summary written) if
+        ``exit_when_done``; spin_nodes then stops.
+    """
+
+    def __init__(self, keep_images: bool = False, **kwargs) -> None:
+        super().__init__("monitor", **kwargs)
+        self.params = declare(self, SHARED + MONITOR)
+        self.scenario = declare_scenario(self)
+        self.grid = self.scenario.grid
+        self.dt = self.scenario.dt
+        self.frame_id = self.params["world_frame_id"]
+        self.keep_images = keep_images
+        self.images: dict[int, np.ndarray] = {}
+        self.series: list[dict[str, Any]] = []
+        self.done = False
+        self.finished = False
+        self.rejected = 0
+        self.truth: dict[int, np.ndarray] = {}
+        self.alive: dict[int, frozenset[int]] = {}
+        self.densities: dict[int, dict[int, DensityGrid]] = defaultdict(dict)
+        self.statuses: dict[int, dict[int, RobotStatus]] = defaultdict(dict)
+        self.cells: dict[int, np.ndarray] = {}
+        self.positions: dict[int, np.ndarray] = {}
+        self.goals: dict[int, np.ndarray] = {}
+        self.dead_reported: set[int] = set()
+        self.next_step = 0
+        self._wall_start: float | None = None
+        self._last_progress = time.monotonic()
+        self._last_data = time.monotonic()
+        ids = range(self.scenario.robots)
+
+        self.metrics_pub = self.create_publisher(TeamMetrics, T.MONITOR_METRICS,
+                                                 publisher_qos("STEP"))
+        self.estimates_pub = self.create_publisher(TargetSet, T.MONITOR_ESTIMATES,
+                                                   publisher_qos("LATCHED"))
+        self.density_pub = self.create_publisher(DensityGrid, T.MONITOR_DENSITY,
+                                                 publisher_qos("OBSERVATION"))
+        self.markers_pub = self.create_publisher(MarkerArray, T.MONITOR_MARKERS,
+                                                 publisher_qos("OBSERVATION"))
+        self.create_subscription(TargetSet, T.WORLD_TRUTH, self._on_truth,
+                                 subscription_qos("STEP"))
+        self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
+                                 subscription_qos("STEP"))
+        for r in ids:
+            self.create_subscription(DensityGrid, T.robot_topic(r, "density"),
+                                     self._on_density, subscription_qos("STEP"))
+            self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
+                                     self._on_status, subscription_qos("STEP"))
+            self.create_subscription(CellPolygon, T.robot_topic(r, "cell"), self._on_cell,
+                                     subscription_qos("LATCHED"))
+        self.create_timer(0.5, self._on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    # ---------------------------------------------------------------- inputs
+    def _on_truth(self, msg: TargetSet) -> None:
+        try:
+            self.truth[msg.step] = convert.target_positions(msg)
+        except convert.InvalidMessage as exc:
+            self._reject(f"truth of step {msg.step}: {exc}")
+        self._touch()
+
+    def _on_team(self, msg: TeamState) -> None:
+        if len(msg.alive) != len(msg.robot_ids):
+            self._reject(f"team state of step {msg.step}: {len(msg.robot_ids)} ids, "
+                         f"{len(msg.alive)} alive flags")
+            return
+        self.alive[msg.step] = frozenset(int(r) for r, a in zip(msg.robot_ids, msg.alive,
+                                                                strict=True) if a)
+        try:
+            pos = convert.xy(msg.positions, "positions")
+            self.positions = {int(r): pos[i] for i, r in enumerate(msg.robot_ids)}
+        except convert.InvalidMessage as exc:
+            self._reject(f"team state of step {msg.step}: {exc}")
+        self._touch()
+
+    def _on_density(self, msg: DensityGrid) -> None:
+        if msg.step >= self.next_step:
+            self.densities[msg.step][msg.owner_id] = msg
+        self._touch()
+
+    def _on_status(self, msg: RobotStatus) -> None:
+        if msg.state == RobotStatus.STATE_STEP_DONE and msg.step >= self.next_step:
+            self.statuses[msg.step][msg.robot_id] = msg
+            if math.isfinite(msg.goal.x) and math.isfinite(msg.goal.y):
+                self.goals[msg.robot_id] = np.array([msg.goal.x, msg.goal.y])
+            self.dead_reported.update(int(i) for i in msg.dead_ids)
+        self._touch()
+
+    def _on_cell(self, msg: CellPolygon) -> None:
+        try:
+            self.cells[msg.robot_id] = convert.xy(msg.vertices, "vertices")
+        except convert.InvalidMessage as exc:
+            self._reject(f"cell of robot {msg.robot_id}: {exc}")
+
+    def _touch(self) -> None:
+        if self._wall_start is None:
+            self._wall_start = time.monotonic()
+        self._last_data = time.monotonic()
+        self._process_ready_steps()
+
+    def _reject(self, reason: str) -> None:
+        self.rejected += 1
+        self.get_logger().warning(f"monitor: rejected {reason}")
+
+    # ------------------------------------------------------------- processing
+    def _expected(self, k: int) -> frozenset[int] | None:
+        """Robots whose windows make up step k, or None while that is not yet known."""
+        if k not in self.alive:
+            return None
+        later = self.alive.get(k + 1)
+        if later is None:
+            return None
+        return self.alive[k] & later
+
+    def _process_ready_steps(self, force: bool = False) -> None:
+        while not self.done and self.next_step < self.scenario.steps:
+            k = self.next_step
+            expected = self._expected(k)
+            have = self.densities.get(k, {})
+            complete = (expected is not None and k in self.truth
+                        and expected <= set(have))
+            if not complete and not (force and k in self.truth and have):
+                return
+            self._process(k)
+            self.next_step += 1
+        if self.next_step >= self.scenario.steps and not self.done:
+            self._finish()
+
+    def _process(self, k: int) -> None:
+        image = np.zeros(self.grid.shape)
+        have = self.densities.pop(k, {})
+        for rid in sorted(have):
+            try:
+                convert.add_density(image, have[rid], self.grid)
+            except convert.InvalidMessage as exc:
+                self._reject(f"density of robot {rid} at step {k}: {exc}")
+        estimates = extract_targets(self.grid, image, self.scenario.extraction)
+        truth = self.truth.pop(k)
+        parts = ospa_components(truth, estimates, self.scenario.ospa_c, self.scenario.ospa_p)
+        statuses = self.statuses.pop(k, {})
+        msgs = (float(np.mean([s.messages_received for s in statuses.values()]))
+                if statuses else 0.0)
+        alive = self.alive.get(k, frozenset())
+        row = {"step": k, "t": k * self.dt, "ospa": float(parts.distance),
+               "ospa_localisation": float(parts.localisation),
+               "ospa_cardinality": float(parts.cardinality),
+               "cardinality_true": int(len(truth)), "cardinality_est": int(len(estimates)),
+               "expected_cardinality": float(expected_cardinality(image)),
+               "robots_alive": len(alive), "robots_reported": len(have),
+               "messages_per_robot": msgs}
+        self.series.append(row)
+        if self.keep_images:
+            self.images[k] = image
+        stamp = convert.stamp(k, self.dt)
+        h = convert.header(k, self.dt, self.frame_id)
+        self.metrics_pub.publish(TeamMetrics(
+            header=h, step=k, ospa=row["ospa"], ospa_localisation=row["ospa_localisation"],
+            ospa_cardinality=row["ospa_cardinality"], ospa_c=float(self.scenario.ospa_c),
+            ospa_p=float(self.scenario.ospa_p), cardinality_true=row["cardinality_true"],
+            cardinality_estimated=row["cardinality_est"],
+            expected_cardinality=row["expected_cardinality"], robots_alive=len(alive),
+            robots_reported=len(have), messages_per_robot=msgs))
+        self.estimates_pub.publish(convert.target_set(
+            convert.TEAM_ID, k, np.arange(len(estimates)), estimates,
+            row["expected_cardinality"], self.dt, self.frame_id))
+        if self.params["publish_density"]:
+            self.density_pub.publish(convert.density_grid(
+                convert.TEAM_ID, k, self.grid, np.arange(self.grid.size), image.ravel(),
+                self.dt, self.frame_id))
+        if self.params["publish_markers"]:
+            self.markers_pub.publish(team_markers(stamp, self.frame_id, self.cells,
+                                                  self.positions, self.goals, estimates))
+        every = self.params["progress_every"]
+        if every and (k % every == 0 or k == self.scenario.steps - 1):
+            self._log_progress(row)
+
+    def _log_progress(self, row: dict[str, Any]) -> None:
+        wall = time.monotonic() - (self._wall_start or time.monotonic())
+        rate = (row["step"] + 1) / wall if wall > 0 else float("nan")
+        self.get_logger().info(
+            f"t = {row['t']:7.1f} s  step {row['step'] + 1}/{self.scenario.steps}  "
+            f"{rate:5.1f} steps/s ({rate * self.dt:4.1f} x real time)  OSPA "
+            f"{row['ospa']:5.2f} m  targets est {row['cardinality_est']} / true "
+            f"{row['cardinality_true']}  robots {row['robots_reported']}")
+
+    def _on_timer(self) -> None:
+        if self.done:
+            return
+        idle = time.monotonic() - self._last_data
+        if self.series and idle >= self.params["end_timeout"]:
+            self.get_logger().warning(f"monitor: no data for {idle:.0f} s; finishing with "
+                                      f"{len(self.series)} of {self.scenario.steps} steps")
+            self._process_ready_steps(force=True)
+            if not self.done:
+                self._finish()
+
+    # ------------------------------------------------------------------ end
+    def summary(self) -> dict[str, Any]:
+        """The run's summary (DESIGN.md "Outputs of a run") from the steps processed so far."""
+        s = self.scenario
+        ospa = [r["ospa"] for r in self.series]
+        half = ospa[len(ospa) // 2:]
+        last = self.series[-1] if self.series else {}
+        final_alive = self.alive.get(max(self.alive)) if self.alive else frozenset()
+        dead = sorted((set(range(s.robots)) - set(final_alive or ())) | self.dead_reported)
+        msgs = [r["messages_per_robot"] for r in self.series if r["robots_reported"]]
+        wall = (time.monotonic() - self._wall_start) if self._wall_start else 0.0
+        return {
+            "scenario": s.name, "seed": s.seed, "robots": s.robots,
+            "steps": len(self.series), "sim_duration_s": len(self.series) * s.dt,
+            "wall_duration_s": wall,
+            "ospa_final": ospa[-1] if ospa else None,
+            "ospa_mean_last_half": float(np.mean(half)) if half else None,
+            "ospa_series": [[r["t"], r["ospa"]] for r in self.series],
+            "cardinality_true_final": last.get("cardinality_true"),
+            "cardinality_est_final": last.get("cardinality_est"),
+            "expected_cardinality_final": last.get("expected_cardinality"),
+            "messages_per_robot_per_step": float(np.mean(msgs)) if msgs else 0.0,
+            "dead_robots": dead,
+            "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
+            "rejected_messages_monitor": self.rejected,
+        }
+
+    def _finish(self) -> None:
+        self.done = True
+        path = self.params["summary_path"]
+        if path:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+            Path(path).write_text(json.dumps(self.summary(), indent=2) + "\n")
+            self.get_logger().info(f"monitor: summary written to {path}")
+        if self.params["exit_when_done"]:
+            self.finished = True
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the monitor (``python -m phd_swarm.nodes.monitor --ros-args ...``)."""
+    from phd_swarm.nodes.spin import spin_nodes
+
+    return spin_nodes(lambda: [MonitorNode()], args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

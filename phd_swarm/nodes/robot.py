@@ -1,0 +1,360 @@
+"""Robot node: one robot's distributed PHD filter and controller over ROS topics.
+
+A thin adapter over :class:`phd_swarm.core.protocol.robot.RobotFilter` (Dames Alg. 1-2,
+Chen's cumulative state) and :func:`phd_swarm.core.controller.decide` (Dames eq. 8, Chen
+eq. 2-3 and 12-14). Per step k:
+
+1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
+   q^k): the step starts, and the protocol's messages go to the contacts' inboxes
+   (``/robot_<j>/inbox/<kind>``, :mod:`phd_swarm.nodes.topics`);
+2. messages arrive on the own inbox, are checked (:mod:`phd_swarm.nodes.convert`, plus known
+   sender, right address, step in range) and fed to the protocol; bad ones are dropped with
+   a logged reason and counted (``rejected_messages`` in the status);
+3. when the protocol step is done, the controller picks the goal and the next power weight;
+   the node publishes the local density window, cell, local estimates, goal and a
+   ``STEP_DONE`` status, which is what the world waits for in lockstep mode.
+
+A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds: if no
+protocol message arrived during a period while the step waits, one round passes
+(:meth:`RobotFilter.tick`); after ``timeout_ticks`` rounds silent peers are declared dead.
+
+At start-up the robot waits for the world's team state (``/world/robots``, latched) to
+initialise its partition, and for ``observers`` subscribers on its status and density, then
+reports ``READY``. It refuses to start when another node already publishes this robot id's
+status (a duplicate robot id).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections import defaultdict, deque
+
+import numpy as np
+import rclpy
+from rclpy.clock import Clock, ClockType
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+from phd_swarm.core.controller import ControllerConfig, decide
+from phd_swarm.core.extraction import expected_cardinality, extract_targets
+from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.protocol.messages import (
+    CellMsg,
+    Envelope,
+    EtaPartialMsg,
+    EtaTotalMsg,
+    Message,
+    ScanMsg,
+    StateMsg,
+    TransferMsg,
+    sender_of,
+)
+from phd_swarm.core.protocol.robot import FilterContext, ProtocolError, RobotFilter
+from phd_swarm.nodes import convert
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.param_specs import ROBOT, SHARED
+from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
+from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm_msgs.msg import (
+    CellPolygon,
+    DensityGrid,
+    EtaPartial,
+    EtaTotal,
+    MeasurementSet,
+    ParticleTransfer,
+    RobotState,
+    RobotStatus,
+    TargetSet,
+    TeamState,
+)
+from geometry_msgs.msg import Point, PoseStamped
+
+#: Inbox kind of each core message type.
+_KIND = {StateMsg: "state", CellMsg: "cell", ScanMsg: "measurements",
+         EtaPartialMsg: "eta_partial", EtaTotalMsg: "eta_total", TransferMsg: "particles"}
+_ROS_TYPE = {"state": RobotState, "cell": CellPolygon, "measurements": MeasurementSet,
+             "eta_partial": EtaPartial, "eta_total": EtaTotal, "particles": ParticleTransfer}
+
+#: Log the first few rejections of each reason, then every this many.
+_LOG_EVERY = 100
+
+
+class RobotNode(Node):
+    """One robot (see the module docstring). Node name ``robot`` in namespace ``/robot_<id>``.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``context``, ``namespace``,
+        ``parameter_overrides``, ``cli_args``...).
+
+    Raises
+    ------
+    ParameterError
+        For a missing or out-of-range ``robot_id`` or another bad parameter.
+    """
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("robot", **kwargs)
+        self.params = declare(self, SHARED + ROBOT)
+        self.scenario = declare_scenario(self)
+        rid = self.params["robot_id"]
+        if not 0 <= rid < self.scenario.robots:
+            raise ParameterError(f"node {self.get_fully_qualified_name()}: robot_id must be "
+                                 f"set to 0..{self.scenario.robots - 1} (the scenario has "
+                                 f"{self.scenario.robots} robots), got {rid}")
+        self.robot_id = rid
+        self.frame_id = self.params["world_frame_id"]
+        self.dt = self.scenario.dt
+        self.grid = self.scenario.grid
+        rho_max = self.params["rho_max"] or self.scenario.models.detection.radius
+        self.controller = ControllerConfig(self.params["controller"], rho_max,
+                                           self.params["cumulative_mode"])
+        self.ctx = FilterContext(self.grid, self.scenario.models,
+                                 cumulative=self.controller.uses_cumulative,
+                                 timeout_ticks=self.params["timeout_ticks"],
+                                 max_step=self.scenario.robot_max_speed * self.dt)
+        self.filter = RobotFilter(rid, self.ctx)
+        self.team_ids: frozenset[int] = frozenset()
+        self.initialised = False
+        self.ready = False
+        self.power_weight = 0.0
+        self.z = np.empty((0, 2))
+        self.position = np.zeros(2)
+        self.pending: deque[ScanMsg] = deque()
+        self.last_scan_step = -1
+        self.counters: dict[str, int] = defaultdict(int)
+        self.rejections: dict[str, int] = defaultdict(int)
+        self._heard = False
+        self._sent = 0
+        self._received = 0
+        self._started = time.monotonic()
+        self._peer_pubs: dict[tuple[int, str], object] = {}
+        self._finished = -1
+
+        if self.count_publishers("status") > 0:
+            raise ParameterError(f"duplicate robot id {rid}: another node already publishes "
+                                 f"{self.resolve_topic_name('status')}")
+        self.status_pub = self.create_publisher(RobotStatus, "status", publisher_qos("STEP"))
+        self.goal_pub = self.create_publisher(PoseStamped, "goal", publisher_qos("LATCHED"))
+        self.cell_pub = self.create_publisher(CellPolygon, "cell", publisher_qos("LATCHED"))
+        self.density_pub = self.create_publisher(DensityGrid, "density", publisher_qos("STEP"))
+        self.estimates_pub = self.create_publisher(TargetSet, "estimates",
+                                                   publisher_qos("LATCHED"))
+        self.create_subscription(MeasurementSet, "measurements", self._on_scan,
+                                 subscription_qos("STEP"))
+        for kind, typ in _ROS_TYPE.items():
+            self.create_subscription(typ, f"inbox/{kind}", self._make_inbox_callback(kind),
+                                     subscription_qos("INBOX"))
+        self._team_sub = self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
+                                                  subscription_qos("LATCHED"))
+        self.create_timer(self.params["tick_period"], self._on_timer,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.get_logger().info(f"robot {rid}: {self.controller.kind} controller, "
+                               f"{self.scenario.name}, {self.scenario.robots} robots")
+
+    # ------------------------------------------------------------------ start-up
+    def _on_team(self, msg: TeamState) -> None:
+        if self.initialised:
+            return
+        ids = np.array(msg.robot_ids, dtype=np.int64)
+        try:
+            pos = convert.xy(msg.positions, "positions")
+            if len(pos) != len(ids) or len(np.unique(ids)) != len(ids):
+                raise convert.InvalidMessage("ids and positions differ in length or repeat")
+            self.filter.initialise(ids, pos)
+        except (ValueError, convert.InvalidMessage) as exc:
+            self._reject("team_state", f"team state from {T.WORLD_ROBOTS}: {exc}")
+            return
+        self.team_ids = frozenset(int(i) for i in ids)
+        self.initialised = True
+        self.destroy_subscription(self._team_sub)
+        self._check_ready()
+
+    def _check_ready(self) -> None:
+        if self.ready or not self.initialised:
+            return
+        need = self.params["observers"]
+        matched = (self.status_pub.get_subscription_count() >= 1 + need
+                   and (not self.params["publish_density"]
+                        or self.density_pub.get_subscription_count() >= need))
+        waited = time.monotonic() - self._started
+        if not matched and waited < self.params["ready_timeout"]:
+            return
+        if not matched:
+            self.get_logger().error(f"robot {self.robot_id}: observers did not match within "
+                                    f"{self.params['ready_timeout']} s; going on without them")
+        self.ready = True
+        self.status_pub.publish(RobotStatus(header=convert.header(0, self.dt, self.frame_id),
+                                            state=RobotStatus.STATE_READY,
+                                            robot_id=self.robot_id))
+        self._start_pending()
+
+    # -------------------------------------------------------------------- steps
+    def _on_scan(self, msg: MeasurementSet) -> None:
+        try:
+            scan = convert.scan_from_ros(msg, self.params["max_measurements"])
+            if scan.robot_id != self.robot_id:
+                raise convert.InvalidMessage(f"measurement set of robot {scan.robot_id} on "
+                                             f"robot {self.robot_id}'s topic")
+            if scan.step <= self.last_scan_step or scan.step >= self.scenario.steps:
+                raise convert.InvalidMessage(f"step {scan.step} out of range (last "
+                                             f"{self.last_scan_step}, steps "
+                                             f"{self.scenario.steps})")
+        except convert.InvalidMessage as exc:
+            self._reject("measurements", f"measurements from the world: {exc}")
+            return
+        self.last_scan_step = scan.step
+        self.pending.append(scan)
+        self._start_pending()
+
+    def _start_pending(self) -> None:
+        if not self.ready or not self.filter.done or not self.pending:
+            return
+        scan = self.pending.popleft()
+        self.position = scan.sensor
+        self.z = scan.z
+        self._sent = self._received = 0
+        try:
+            out = self.filter.start_step(scan.step, scan.sensor, self.power_weight, scan.z)
+        except (ProtocolError, ValueError) as exc:
+            self._reject("step", f"cannot start step {scan.step}: {exc}")
+            return
+        self._send(out)
+        self._after_progress()
+
+    def _make_inbox_callback(self, kind: str):
+        def callback(msg) -> None:
+            self._on_inbox(kind, msg)
+        return callback
+
+    def _on_inbox(self, kind: str, ros_msg) -> None:
+        try:
+            msg = convert.from_ros(ros_msg, self.grid, self.params["max_measurements"])
+            self._check_welcome(msg)
+        except convert.InvalidMessage as exc:
+            self._reject(kind, f"inbox/{kind}: {exc}")
+            return
+        self._heard = True
+        self._received += 1
+        self.filter.receive(msg)
+        if self.filter.done:
+            return
+        self._send(self.filter.advance())
+        self._after_progress()
+
+    def _check_welcome(self, msg: Message) -> None:
+        src = sender_of(msg)
+        if src == self.robot_id:
+            raise convert.InvalidMessage(f"sender claims this robot's own id {src} (duplicate "
+                                         "robot id?)")
+        if src not in self.team_ids:
+            raise convert.InvalidMessage(f"unknown robot id {src}; the team is "
+                                         f"0..{self.scenario.robots - 1}")
+        if isinstance(msg, TransferMsg) and msg.to_id != self.robot_id:
+            raise convert.InvalidMessage(f"transfer addressed to robot {msg.to_id}")
+        if isinstance(msg, EtaPartialMsg) and msg.active_id != self.robot_id:
+            raise convert.InvalidMessage(f"partial sums for robot {msg.active_id}")
+        if isinstance(msg, ScanMsg) and len(msg.z) > self.params["max_measurements"]:
+            raise convert.InvalidMessage("too many measurements")
+        if not 0 <= msg.step < self.scenario.steps or msg.step > self.last_scan_step + 2:
+            raise convert.InvalidMessage(f"step {msg.step} out of range (current "
+                                         f"{self.filter.step}, steps {self.scenario.steps})")
+
+    def _on_timer(self) -> None:
+        if not self.ready:
+            self._check_ready()
+            return
+        if self.filter.done:
+            self._heard = False
+            return
+        if self._heard:
+            self._heard = False
+            return
+        self._send(self.filter.tick())
+        self._after_progress()
+
+    def _after_progress(self) -> None:
+        if self.filter.done and self.filter.step >= 0 and self._finished != self.filter.step:
+            self._finish_step()
+            self._start_pending()
+
+    def _finish_step(self) -> None:
+        f = self.filter
+        k = f.step
+        self._finished = k
+        d = decide(self.controller, self.grid, self.position, f.cell, f.bins, f.weights,
+                   len(self.z) > 0, f.alpha, f.count)
+        self.power_weight = d.power_weight
+        if self.params["publish_density"]:
+            self.density_pub.publish(convert.density_grid(self.robot_id, k, self.grid, f.bins,
+                                                          f.weights, self.dt, self.frame_id))
+        self.cell_pub.publish(CellPolygon(
+            header=convert.header(k, self.dt, self.frame_id), robot_id=self.robot_id, step=k,
+            generator=Point(x=float(self.position[0]), y=float(self.position[1])),
+            power_weight=float(d.power_weight), vertices=convert.points(f.cell),
+            neighbour_ids=convert.u32(f.neighbours)))
+        est = self._local_estimates()
+        self.estimates_pub.publish(convert.target_set(
+            self.robot_id, k, np.arange(len(est)), est, expected_cardinality(f.weights),
+            self.dt, self.frame_id))
+        self.goal_pub.publish(convert.pose_stamped(d.goal, k, self.dt, self.frame_id))
+        stats = f.stats
+        self.status_pub.publish(RobotStatus(
+            header=convert.header(k, self.dt, self.frame_id), state=RobotStatus.STATE_STEP_DONE,
+            robot_id=self.robot_id, step=k, goal=Point(x=float(d.goal[0]), y=float(d.goal[1])),
+            power_weight=float(d.power_weight), owned_bins=int(f.bins.size),
+            mass=float(np.sum(f.weights)), messages_received=self._received,
+            messages_sent=self._sent, rejected_messages=sum(self.rejections.values()),
+            dropped_messages=int(stats.get("dropped", 0)),
+            timeouts=int(stats.get("timeouts", 0)), orphan_bins=int(stats.get("orphan_bins", 0)),
+            dead_ids=convert.u32(sorted(f.dead))))
+
+    def _local_estimates(self) -> np.ndarray:
+        """Estimates from the own bins: extraction on the window around the cell."""
+        f = self.filter
+        if f.bins.size == 0:
+            return np.empty((0, 2))
+        nx = self.grid.shape[1]
+        rows, cols = np.divmod(f.bins, nx)
+        r0, c0 = int(rows.min()), int(cols.min())
+        h, w = int(rows.max()) - r0 + 1, int(cols.max()) - c0 + 1
+        res = self.grid.resolution
+        env = self.grid.env
+        sub = Grid(Environment(env.xmin + c0 * res, env.ymin + r0 * res,
+                               env.xmin + (c0 + w) * res, env.ymin + (r0 + h) * res), res)
+        image = np.zeros((h, w))
+        image[rows - r0, cols - c0] = f.weights
+        return extract_targets(sub, image, self.scenario.extraction)
+
+    # ---------------------------------------------------------------- transport
+    def _send(self, envelopes: list[Envelope]) -> None:
+        for env in envelopes:
+            kind = _KIND[type(env.msg)]
+            pub = self._peer_pubs.get((env.dst, kind))
+            if pub is None:
+                pub = self.create_publisher(_ROS_TYPE[kind], T.robot_topic(env.dst,
+                                                                           f"inbox/{kind}"),
+                                            publisher_qos("INBOX"))
+                self._peer_pubs[(env.dst, kind)] = pub
+            pub.publish(convert.to_ros(env.msg, self.dt, self.frame_id))
+            self._sent += 1
+
+    def _reject(self, kind: str, reason: str) -> None:
+        self.rejections[kind] += 1
+        n = sum(self.rejections.values())
+        if n <= 10 or n % _LOG_EVERY == 0:
+            self.get_logger().warning(f"robot {self.robot_id}: rejected {reason} "
+                                      f"({n} rejected so far)")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run one robot node (``python -m phd_swarm.nodes.robot --ros-args ...``)."""
+    from phd_swarm.nodes.spin import spin_nodes
+
+    return spin_nodes(lambda: [RobotNode()], args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
