@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.core.extraction import expected_cardinality, extract_targets
 from phd_swarm.core.ospa import ospa_components
@@ -46,7 +47,6 @@ from phd_swarm_msgs.msg import (
     TeamMetrics,
     TeamState,
 )
-from visualization_msgs.msg import MarkerArray
 
 
 class MonitorNode(Node):
@@ -120,6 +120,8 @@ class MonitorNode(Node):
 
     # ---------------------------------------------------------------- inputs
     def _on_truth(self, msg: TargetSet) -> None:
+        if self._wall_start is None:
+            self._wall_start = time.monotonic()
         try:
             self.truth[msg.step] = convert.target_positions(msg)
         except convert.InvalidMessage as exc:
@@ -160,8 +162,6 @@ class MonitorNode(Node):
             self._reject(f"cell of robot {msg.robot_id}: {exc}")
 
     def _touch(self) -> None:
-        if self._wall_start is None:
-            self._wall_start = time.monotonic()
         self._last_data = time.monotonic()
         self._process_ready_steps()
 
@@ -287,6 +287,11 @@ class MonitorNode(Node):
             "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
             "rejected_messages_monitor": self.rejected,
         }
+
+    def close(self) -> None:
+        """On shutdown before the end: write the summary of the steps processed so far."""
+        if not self.done:
+            self._finish()
 
     def _finish(self) -> None:
         self.done = True

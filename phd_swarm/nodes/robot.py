@@ -31,9 +31,8 @@ import time
 from collections import defaultdict, deque
 
 import numpy as np
-import rclpy
+from geometry_msgs.msg import Point, PoseStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from phd_swarm.core.controller import ControllerConfig, decide
@@ -68,7 +67,6 @@ from phd_swarm_msgs.msg import (
     TargetSet,
     TeamState,
 )
-from geometry_msgs.msg import Point, PoseStamped
 
 #: Inbox kind of each core message type.
 _KIND = {StateMsg: "state", CellMsg: "cell", ScanMsg: "measurements",
@@ -133,6 +131,9 @@ class RobotNode(Node):
         self._peer_pubs: dict[tuple[int, str], object] = {}
         self._finished = -1
 
+        if self.get_namespace() != T.robot_namespace(rid):
+            raise ParameterError(f"robot {rid} must run in namespace {T.robot_namespace(rid)}"
+                                 f" (peers address it there), not {self.get_namespace()!r}")
         if self.count_publishers("status") > 0:
             raise ParameterError(f"duplicate robot id {rid}: another node already publishes "
                                  f"{self.resolve_topic_name('status')}")

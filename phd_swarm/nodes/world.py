@@ -25,9 +25,11 @@ import sys
 import time
 
 import numpy as np
+from geometry_msgs.msg import PoseStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock as ClockMsg
+from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
@@ -37,8 +39,6 @@ from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.sim.world import World
 from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TargetSet, TeamState
-from geometry_msgs.msg import PoseStamped
-from visualization_msgs.msg import MarkerArray
 
 
 class WorldNode(Node):

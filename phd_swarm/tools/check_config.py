@@ -1,0 +1,36 @@
+"""Validate config files: ``python -m phd_swarm.tools.check_config CONFIG...``.
+
+Prints one line per file (scenario, team, steps) or the error naming the file and the key,
+and exits 1 if any file is bad. The run scripts call it before starting a node, so a typo
+fails at once instead of inside a ROS process.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from phd_swarm.config import load_run_config
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Check every file named on the command line."""
+    paths = sys.argv[1:] if argv is None else argv
+    if not paths:
+        print("usage: python -m phd_swarm.tools.check_config CONFIG...", file=sys.stderr)
+        return 2
+    bad = 0
+    for path in paths:
+        try:
+            rc = load_run_config(path)
+        except ValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            bad += 1
+            continue
+        s = rc.scenario
+        print(f"{path}: {s.name}, {s.robots} robots, {s.targets.count} targets, "
+              f"{s.steps} steps of {s.dt} s, {s.resolution} m bins")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

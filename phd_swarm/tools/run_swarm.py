@@ -1,0 +1,294 @@
+"""Run a whole swarm: world, monitor, recorder and the robots as separate processes.
+
+``scripts/run_swarm.sh CONFIG [--robots N] [--targets M] [--duration S] [--seed K]
+[--controller C] [--out DIR] [--name NAME] [--realtime] [--robots-per-process P]``
+
+1. loads and validates CONFIG (:mod:`phd_swarm.config`), applies the overrides and writes the
+   resolved parameter file to ``<out>/<name>/config.yaml``;
+2. starts the recorder and the monitor, one process per robot (or per ``P`` robots with
+   :mod:`phd_swarm.nodes.team`), then the world; every child runs on loopback with the
+   caller's ROS_DOMAIN_ID, in its own process group, logging to ``logs/<node>.log``;
+3. shows the monitor's progress lines (sim time, steps per second, OSPA, estimated vs true
+   number of targets) while the world runs;
+4. when the world is done (or on Ctrl-C), lets the monitor write ``summary.json``, stops the
+   recorder so that ``run.mcap`` is closed cleanly, stops the robots, and reports.
+
+A robot process that dies mid-run does not stop the run: the world counts it dead after
+``step_timeout`` and the summary lists it in ``dead_robots``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import IO, Any
+
+from phd_swarm.config import RunConfig, load_run_config
+from phd_swarm.nodes.param_specs import ROBOT
+from phd_swarm.nodes.topics import robot_namespace
+
+#: Wall-clock fields of summary.json: they differ between two runs of the same seed.
+WALL_CLOCK_FIELDS = ("wall_duration_s", "real_time_factor", "run_dir", "started")
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Command-line options (see the module docstring)."""
+    p = argparse.ArgumentParser(prog="scripts/run_swarm.sh",
+                                description="Run world, monitor, recorder and one process "
+                                            "per robot; results in runs/<name>/.")
+    p.add_argument("config", help="config file (config/*.yaml)")
+    p.add_argument("--robots", type=int, help="team size")
+    p.add_argument("--targets", type=int, help="number of (initial) targets")
+    p.add_argument("--duration", type=float, help="sim time [s]")
+    p.add_argument("--seed", type=int, help="random seed")
+    p.add_argument("--controller", choices=next(s for s in ROBOT
+                                                if s.name == "controller").choices)
+    p.add_argument("--out", default="runs", help="parent directory of the run (default runs)")
+    p.add_argument("--name", help="run name (default <scenario>-<controller>-r<N>-s<seed>)")
+    p.add_argument("--realtime", action="store_true", help="fixed-rate steps instead of "
+                                                           "lockstep")
+    p.add_argument("--robots-per-process", type=int, default=1, metavar="P",
+                   help="host P robot nodes per process (default 1)")
+    p.add_argument("--no-record", action="store_true", help="do not write run.mcap")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    return p.parse_args(argv)
+
+
+def resolve(opts: argparse.Namespace) -> RunConfig:
+    """The config with the command-line overrides applied (ValueError on bad values)."""
+    rc = load_run_config(opts.config)
+    s = rc.scenario
+    changes: dict[str, Any] = {}
+    if opts.robots is not None:
+        changes["robots"] = opts.robots
+    if opts.duration is not None:
+        changes["duration"] = opts.duration
+    if opts.seed is not None:
+        changes["seed"] = opts.seed
+    if opts.targets is not None:
+        t = s.targets
+        if t.kind == "clustered_walk" and t.per_cluster:
+            n = len(t.per_cluster)
+            per = tuple(opts.targets // n + (1 if i < opts.targets % n else 0)
+                        for i in range(n))
+            changes["targets"] = replace(t, count=opts.targets, per_cluster=per)
+        else:
+            changes["targets"] = replace(t, count=opts.targets)
+    try:
+        scenario = s.with_overrides(**changes) if changes else s
+    except ValueError as exc:
+        raise ValueError(f"{opts.config}: command-line override: {exc}") from None
+    robot = {"controller": opts.controller} if opts.controller else {}
+    world = {"mode": "realtime"} if opts.realtime else {}
+    return rc.with_overrides(scenario, robot=robot, world=world)
+
+
+def _fresh_dir(parent: Path, name: str) -> Path:
+    """``parent/name``, or ``name-2``, ``name-3``... so no earlier run is overwritten."""
+    path, n = parent / name, 1
+    while path.exists():
+        n += 1
+        path = parent / f"{name}-{n}"
+    path.mkdir(parents=True)
+    return path
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def _pump(stream: IO[str], log: IO[str], echo: bool) -> None:
+    """Copy a child's output to its log; echo progress lines and errors to the terminal."""
+    for line in stream:
+        log.write(line)
+        log.flush()
+        if echo and ("steps/s" in line or line.startswith(("[ERROR]", "error:"))
+                     or "world: done" in line):
+            print(line.rstrip().split("]: ", 1)[-1], flush=True)
+
+
+class Swarm:
+    """The child processes of one run; always stopped by PID (process group)."""
+
+    def __init__(self, run_dir: Path, env: dict[str, str], quiet: bool) -> None:
+        self.run_dir = run_dir
+        self.env = env
+        self.quiet = quiet
+        self.procs: dict[str, subprocess.Popen] = {}
+        self._threads: list[threading.Thread] = []
+        (run_dir / "logs").mkdir(exist_ok=True)
+
+    def start(self, name: str, module: str, ros_args: list[str], extra: list[str] = (),
+              echo: bool = False) -> subprocess.Popen:
+        """Start ``python -m module extra --ros-args ros_args`` as child ``name``."""
+        argv = [sys.executable, "-m", module, *extra, "--ros-args", *ros_args]
+        proc = subprocess.Popen(argv, env=self.env, start_new_session=True,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        log = open(self.run_dir / "logs" / f"{name}.log", "w")  # noqa: SIM115 (closed by EOF)
+        t = threading.Thread(target=_pump, args=(proc.stdout, log, echo and not self.quiet),
+                             daemon=True)
+        t.start()
+        self._threads.append(t)
+        self.procs[name] = proc
+        return proc
+
+    def stop(self, name: str, grace: float = 10.0) -> int | None:
+        """SIGINT child ``name``'s group, SIGKILL after ``grace`` s; returns its exit code."""
+        proc = self.procs[name]
+        for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
+            if proc.poll() is not None:
+                break
+            try:
+                os.killpg(proc.pid, sig)
+                proc.wait(timeout=wait)
+            except ProcessLookupError:
+                break
+            except subprocess.TimeoutExpired:
+                continue
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+        return proc.poll()
+
+    def stop_all(self) -> None:
+        """Stop every child still running (robots in parallel), then clean Fast DDS shm."""
+        running = [n for n, p in self.procs.items() if p.poll() is None]
+        for n in running:
+            try:
+                os.killpg(self.procs[n].pid, signal.SIGINT)
+            except ProcessLookupError:
+                pass
+        for n in running:
+            self.stop(n, grace=5.0)
+        for t in self._threads:
+            t.join(timeout=2.0)
+        tool = shutil.which("fastdds")
+        if tool:
+            subprocess.run([tool, "shm", "clean"], stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, timeout=30, check=False)
+
+
+def run(opts: argparse.Namespace) -> int:
+    """Run the swarm described by ``opts``; returns the exit code."""
+    rc = resolve(opts)
+    s = rc.scenario
+    controller = rc.param("robot", "controller")
+    name = opts.name or f"{s.name}-{controller}-r{s.robots}-s{s.seed}"
+    run_dir = _fresh_dir(Path(opts.out), name)
+    record = not opts.no_record
+    observers = 2 if record else 1
+    rc = rc.with_overrides(
+        world={"observers": observers},
+        robot={"observers": observers},
+        monitor={"summary_path": str(run_dir / "summary.json"), "exit_when_done": True},
+        recorder={"output": str(run_dir / "run.mcap"),
+                  "params_file": str(run_dir / "config.yaml"), "discover": False})
+    params = rc.write_params(run_dir / "config.yaml")
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env.setdefault("ROS_DOMAIN_ID", "42")
+    env["PYTHONUNBUFFERED"] = "1"
+    common = ["--params-file", str(params)]
+    print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
+          f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed {s.seed}, "
+          f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}",
+          flush=True)
+    print(f"run_swarm: results in {run_dir}/", flush=True)
+    swarm = Swarm(run_dir, env, opts.quiet)
+    started = time.monotonic()
+    interrupted = False
+    code = 0
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        if record:
+            swarm.start("recorder", "phd_swarm.nodes.recorder", common)
+        swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True)
+        per = max(1, opts.robots_per_process)
+        for first in range(0, s.robots, per):
+            ids = list(range(first, min(first + per, s.robots)))
+            if per == 1:
+                swarm.start(f"robot_{first}", "phd_swarm.nodes.robot",
+                            [*common, "-r", f"__ns:={robot_namespace(first)}",
+                             "-p", f"robot_id:={first}"])
+            else:
+                swarm.start(f"robots_{ids[0]}-{ids[-1]}", "phd_swarm.nodes.team",
+                            common, extra=["--ids", f"{ids[0]}-{ids[-1]}"])
+        world = swarm.start("world", "phd_swarm.nodes.world", common, echo=True)
+        while world.poll() is None:
+            time.sleep(0.2)
+            monitor = swarm.procs["monitor"]
+            if monitor.poll() is not None and monitor.returncode != 0:
+                raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
+                                   f"{run_dir}/logs/monitor.log")
+        if world.returncode != 0:
+            print(f"run_swarm: the world exited with code {world.returncode}; see "
+                  f"{run_dir}/logs/world.log", file=sys.stderr)
+            code = 1
+        end_timeout = float(rc.param("monitor", "end_timeout")) + 15.0
+        try:
+            swarm.procs["monitor"].wait(timeout=end_timeout)
+        except subprocess.TimeoutExpired:
+            print("run_swarm: the monitor did not finish; stopping it", file=sys.stderr)
+    except KeyboardInterrupt:
+        interrupted = True
+        print("\nrun_swarm: interrupted; stopping the swarm", flush=True)
+    except RuntimeError as exc:
+        print(f"run_swarm: {exc}", file=sys.stderr)
+        code = 1
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if "world" in swarm.procs:
+            swarm.stop("world")
+        if "monitor" in swarm.procs:
+            swarm.stop("monitor")
+        if record and "recorder" in swarm.procs:
+            swarm.stop("recorder", grace=30.0)
+        swarm.stop_all()
+    wall = time.monotonic() - started
+    return _report(run_dir, rc, wall, interrupted) or code
+
+
+def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool) -> int:
+    path = run_dir / "summary.json"
+    if not path.exists():
+        print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
+        return 130 if interrupted else 1
+    summary = json.loads(path.read_text())
+    s = rc.scenario
+    summary.update({"controller": rc.param("robot", "controller"),
+                    "mode": rc.param("world", "mode"), "complete": summary["steps"] == s.steps,
+                    "run_dir": str(run_dir), "wall_duration_s": wall,
+                    "real_time_factor": summary["sim_duration_s"] / wall if wall else None})
+    path.write_text(json.dumps(summary, indent=2) + "\n")
+    print(f"run_swarm: {summary['steps']}/{s.steps} steps, {summary['sim_duration_s']:g} s sim "
+          f"in {wall:.1f} s wall ({summary['real_time_factor']:.2f} x real time); final OSPA "
+          f"{summary['ospa_final']} m, targets est {summary['cardinality_est_final']} / true "
+          f"{summary['cardinality_true_final']}; dead robots: "
+          f"{summary['dead_robots'] or 'none'}", flush=True)
+    print(f"run_swarm: results in {run_dir}/ (run.mcap, summary.json, config.yaml, logs/)",
+          flush=True)
+    return 130 if interrupted else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of scripts/run_swarm.sh."""
+    opts = parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        return run(opts)
+    except ValueError as exc:
+        print(f"run_swarm: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

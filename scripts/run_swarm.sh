@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Run a whole swarm (world, monitor, recorder, one process per robot) on this machine.
+# Usage: scripts/run_swarm.sh CONFIG [--robots N] [--targets M] [--duration S] [--seed K]
+#          [--controller phd|uniform|chen_p|chen_o] [--out DIR] [--name NAME] [--realtime]
+#          [--robots-per-process P] [--no-record]
+# Results: <out>/<name>/run.mcap, summary.json, config.yaml, logs/ (default out: runs/).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$ROOT/scripts/setup.sh" >/dev/null
+# shellcheck source=scripts/env.sh
+source "$ROOT/scripts/env.sh"
+exec python -m phd_swarm.tools.run_swarm "$@"

@@ -1,0 +1,74 @@
+"""Robot nodes reject bad messages with a reason and a counter, and keep running."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from geometry_msgs.msg import Point
+from rclpy.parameter import Parameter
+
+from phd_swarm.nodes import convert
+from phd_swarm.nodes.qos import publisher_qos
+from phd_swarm.testing import small_static_scenario, start_swarm
+from phd_swarm_msgs.msg import MeasurementSet, ParticleTransfer, RobotState
+
+
+def _state(robot_id: int, step: int, x: float = 10.0) -> RobotState:
+    return RobotState(header=convert.header(step, 0.5, "map"), robot_id=robot_id, step=step,
+                      position=Point(x=x, y=5.0), power_weight=0.0, cell_radius=1.0)
+
+
+@pytest.mark.ros
+def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
+    from phd_swarm.testing import InProcessRos
+
+    scenario = small_static_scenario(robots=3, steps=24)
+    with InProcessRos(executor="events") as ros:
+        world, monitor, robots = start_swarm(ros, tmp_path, scenario)
+        victim = robots[1]
+        ros.spin_until(lambda: victim.filter.step >= 2, timeout=60.0)
+        evil = ros.node("evil")
+        state = evil.create_publisher(RobotState, "/robot_1/inbox/state", publisher_qos("INBOX"))
+        meas = evil.create_publisher(MeasurementSet, "/robot_1/inbox/measurements",
+                                     publisher_qos("INBOX"))
+        parts = evil.create_publisher(ParticleTransfer, "/robot_1/inbox/particles",
+                                      publisher_qos("INBOX"))
+        ros.spin_until(lambda: state.get_subscription_count() > 0
+                       and meas.get_subscription_count() > 0
+                       and parts.get_subscription_count() > 0, timeout=10.0)
+        k = victim.filter.step + 1
+        state.publish(_state(0, k, x=math.nan))                      # NaN position
+        state.publish(_state(99, k))                                 # unknown robot id
+        state.publish(_state(1, k))                                  # its own id: duplicate
+        state.publish(_state(0, 10**6))                              # step out of range
+        meas.publish(MeasurementSet(header=convert.header(k, 0.5, "map"), robot_id=2,
+                                    step=k, sensor_position=Point(x=1.0, y=1.0),
+                                    measurements=[Point(x=1.0, y=1.0)] * 20_000))  # absurd
+        parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
+                                       to_id=1, step=k, kind=0, bin_indices=[10**8],
+                                       weights=[0.1]))              # bin off the grid
+        assert ros.spin_until(lambda: monitor.done, timeout=120.0)
+        assert dict(victim.rejections) == {"state": 4, "measurements": 1, "particles": 1}
+        assert world.dead == set()
+        assert len(monitor.series) == scenario.steps
+
+
+@pytest.mark.ros
+def test_duplicate_or_unknown_robot_id_refuses_to_start(tmp_path):
+    from phd_swarm.nodes.params import ParameterError
+    from phd_swarm.nodes.robot import RobotNode
+    from phd_swarm.testing import InProcessRos
+
+    scenario = small_static_scenario(robots=3, steps=8)
+    with InProcessRos(executor="events") as ros:
+        start_swarm(ros, tmp_path, scenario)
+        args = ["--ros-args", "--params-file", str(tmp_path / "params.yaml")]
+        probe = ros.node("probe")
+        ros.spin_until(lambda: probe.count_publishers("/robot_2/status") > 0, timeout=10.0)
+        with pytest.raises(ParameterError, match="duplicate robot id 2"):
+            RobotNode(context=ros.context, namespace="/robot_2", cli_args=args,
+                      parameter_overrides=[Parameter("robot_id", value=2)])
+        with pytest.raises(ParameterError, match="robot_id must be set to 0..2"):
+            RobotNode(context=ros.context, namespace="/robot_7", cli_args=args,
+                      parameter_overrides=[Parameter("robot_id", value=7)])
