@@ -171,7 +171,18 @@ class RobotNode(Node):
         self.team_ids = frozenset(int(i) for i in ids)
         self.initialised = True
         self.destroy_subscription(self._team_sub)
+        self._prepare_peers()
         self._check_ready()
+
+    def _prepare_peers(self) -> None:
+        """Create the publishers to the contacts' inboxes ahead of the step that uses them.
+
+        Discovery and matching of a new publisher take a while (much longer with many
+        processes); doing it between steps keeps it off the step's critical path.
+        """
+        for c in self.filter.contacts:
+            for kind in _ROS_TYPE:
+                self._peer_publisher(c, kind)
 
     def _check_ready(self) -> None:
         if self.ready or not self.initialised:
@@ -179,7 +190,8 @@ class RobotNode(Node):
         need = self.params["observers"]
         matched = (self.status_pub.get_subscription_count() >= 1 + need
                    and (not self.params["publish_density"]
-                        or self.density_pub.get_subscription_count() >= need))
+                        or self.density_pub.get_subscription_count() >= need)
+                   and all(p.get_subscription_count() >= 1 for p in self._peer_pubs.values()))
         waited = time.monotonic() - self._started
         if not matched and waited < self.params["ready_timeout"]:
             return
@@ -288,6 +300,7 @@ class RobotNode(Node):
         d = decide(self.controller, self.grid, self.position, f.cell, f.bins, f.weights,
                    len(self.z) > 0, f.alpha, f.count)
         self.power_weight = d.power_weight
+        self._prepare_peers()
         if self.params["publish_density"]:
             self.density_pub.publish(convert.density_grid(self.robot_id, k, self.grid, f.bins,
                                                           f.weights, self.dt, self.frame_id))
@@ -332,15 +345,17 @@ class RobotNode(Node):
     # ---------------------------------------------------------------- transport
     def _send(self, envelopes: list[Envelope]) -> None:
         for env in envelopes:
-            kind = _KIND[type(env.msg)]
-            pub = self._peer_pubs.get((env.dst, kind))
-            if pub is None:
-                pub = self.create_publisher(_ROS_TYPE[kind], T.robot_topic(env.dst,
-                                                                           f"inbox/{kind}"),
-                                            publisher_qos("INBOX"))
-                self._peer_pubs[(env.dst, kind)] = pub
+            pub = self._peer_publisher(env.dst, _KIND[type(env.msg)])
             pub.publish(convert.to_ros(env.msg, self.dt, self.frame_id))
             self._sent += 1
+
+    def _peer_publisher(self, dst: int, kind: str):
+        pub = self._peer_pubs.get((dst, kind))
+        if pub is None:
+            pub = self.create_publisher(_ROS_TYPE[kind], T.robot_topic(dst, f"inbox/{kind}"),
+                                        publisher_qos("INBOX"))
+            self._peer_pubs[(dst, kind)] = pub
+        return pub
 
     def _reject(self, kind: str, reason: str) -> None:
         self.rejections[kind] += 1

@@ -1,0 +1,1 @@
+"""Tools over phd_swarm runs: MCAP log I/O, replay, evaluation, plots, sweeps."""

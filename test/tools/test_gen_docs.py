@@ -1,0 +1,77 @@
+"""Generated docs: up to date, complete, and --check catches stale or missing files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from phd_swarm.nodes import param_specs, topics
+from phd_swarm.tools import gen_docs
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_generated_docs_are_up_to_date():
+    problems = gen_docs.check(ROOT)
+    assert problems == [], ("docs are stale; run `python -m phd_swarm.tools.gen_docs`:\n"
+                            + "\n".join(problems))
+
+
+def test_every_topic_has_a_description():
+    shown = {name for name, _ in gen_docs.documented_topics()}
+    assert len(shown) == len(topics.TEAM_TOPICS) + len(topics.ROBOT_TOPICS)
+    assert shown - set(gen_docs.DESCRIPTIONS) == set(), "topics without a description"
+    assert set(gen_docs.DESCRIPTIONS) - shown == set(), "descriptions of no topic"
+    assert all(d.strip() for d in gen_docs.DESCRIPTIONS.values())
+
+
+def test_every_scenario_key_has_a_meaning():
+    keys = {k for flat in gen_docs.scenario_defaults().values() for k in flat}
+    assert keys - set(gen_docs.SCENARIO_MEANINGS) == set(), "scenario keys without a meaning"
+    assert set(gen_docs.SCENARIO_MEANINGS) - keys == set(), "meanings of no scenario key"
+
+
+def test_every_topic_parameter_and_key_is_in_the_text():
+    text = gen_docs.render_topics()
+    for name, (typ, qos_name, _, _) in gen_docs.documented_topics():
+        row = next(line for line in text.splitlines() if line.startswith(f"| `{name}` |"))
+        assert f"`{typ}`" in row and f"`{qos_name}`" in row
+    params = gen_docs.render_parameters()
+    for _, _, specs in gen_docs.NODE_TABLES:
+        for spec in specs:
+            assert f"| `{spec.name}` |" in params
+    for key in gen_docs.SCENARIO_MEANINGS:
+        assert f"| `scenario.{key}` |" in params
+    assert set(param_specs.NODES.values()) <= {s for _, _, s in gen_docs.NODE_TABLES}
+
+
+def test_qos_summary_resolves_writer_and_reader():
+    assert gen_docs.qos_summary("INBOX") == \
+        "reliable, transient local, depth 16 (writer) / 1000 (reader)"
+    assert gen_docs.qos_summary("LATCHED") == "reliable, transient local, depth 1"
+
+
+def test_check_finds_stale_and_missing_files(tmp_path):
+    assert gen_docs.check(tmp_path) == ["docs/topics.md: missing", "docs/parameters.md: missing"]
+    assert gen_docs.main(["--check", "--root", str(tmp_path)]) == 1
+    assert gen_docs.main(["--root", str(tmp_path)]) == 0
+    assert gen_docs.check(tmp_path) == []
+    assert gen_docs.main(["--check", "--root", str(tmp_path)]) == 0
+
+    path = tmp_path / "docs" / "topics.md"
+    path.write_text(path.read_text().replace("# Topics", "# Topix"))
+    problems = gen_docs.check(tmp_path)
+    assert problems[0] == "docs/topics.md: out of date (2 lines differ)"
+    assert "-# Topix" in problems and "+# Topics" in problems
+    assert gen_docs.write(tmp_path) == [path]
+    assert gen_docs.write(tmp_path) == []
+
+
+def test_a_missing_description_fails_the_render(monkeypatch):
+    monkeypatch.delitem(gen_docs.DESCRIPTIONS, topics.CLOCK)
+    with pytest.raises(ValueError, match="/clock"):
+        gen_docs.render_topics()
+    monkeypatch.delitem(gen_docs.SCENARIO_MEANINGS, "dt")
+    with pytest.raises(ValueError, match="'dt'"):
+        gen_docs.render_parameters()
