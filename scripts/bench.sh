@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Benchmarks: `scripts/bench.sh core|comms [--quick]`. Sets up if needed; prints the figures and
+# Benchmarks: `scripts/bench.sh core|comms|swarm [--quick]`. Sets up if needed; prints the figures and
 # writes them as JSON under bench/results/.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { echo "usage: scripts/bench.sh core|comms [--quick] [options]" >&2; exit 2; }
+usage() { echo "usage: scripts/bench.sh core|comms|swarm [--quick] [options]" >&2; exit 2; }
 [ $# -ge 1 ] || usage
 what="$1"; shift
 "$ROOT/scripts/setup.sh" >/dev/null
@@ -14,5 +14,6 @@ set -u
 case "$what" in
   core) exec python "$ROOT/bench/core.py" "$@" ;;
   comms) exec python "$ROOT/bench/comms.py" "$@" ;;
+  swarm) exec python "$ROOT/bench/swarm.py" "$@" ;;
   *) usage ;;
 esac

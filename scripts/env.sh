@@ -25,10 +25,16 @@ if [ -x "$PHD_SWARM_VENV/bin/python" ]; then
     *) export CMAKE_PREFIX_PATH="$PHD_SWARM_VENV${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}" ;;
   esac
   # The Fast DDS tools in the venv (fastdds, fast-discovery-server) need its libraries.
+  # fast-discovery-server also needs the tinyxml2 the fastrtps wheel vendors in its .libs.
+  _phd_libs="$PHD_SWARM_VENV/lib"
+  for _d in "$PHD_SWARM_VENV"/lib/python3*/site-packages/ros_fastrtps.libs; do
+    [ -d "$_d" ] && _phd_libs="$_phd_libs:$_d"
+  done
   case ":${LD_LIBRARY_PATH:-}:" in
     *":$PHD_SWARM_VENV/lib:"*) ;;
-    *) export LD_LIBRARY_PATH="$PHD_SWARM_VENV/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" ;;
+    *) export LD_LIBRARY_PATH="$_phd_libs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" ;;
   esac
+  unset _phd_libs _d
   export ROS_DISTRO="${ROS_DISTRO:-jazzy}"
 fi
 

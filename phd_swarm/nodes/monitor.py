@@ -185,7 +185,8 @@ class MonitorNode(Node):
             expected = self._expected(k)
             have = self.densities.get(k, {})
             complete = (expected is not None and k in self.truth
-                        and expected <= set(have))
+                        and expected <= set(have)
+                        and expected <= set(self.statuses.get(k, {})))
             if not complete and not (force and k in self.truth and have):
                 return
             self._process(k)

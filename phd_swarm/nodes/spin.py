@@ -12,12 +12,14 @@ The executor is rclpy's ``EventsExecutor`` (several times faster per callback th
 from __future__ import annotations
 
 import os
+import signal
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 from phd_swarm.nodes.params import ParameterError
 
@@ -35,8 +37,17 @@ def make_executor(context: Any = None, kind: str | None = None) -> Any:
 
 
 def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = None) -> int:
-    """Init rclpy with ``args``, spin ``factory()``'s nodes, clean up; returns the exit code."""
-    rclpy.init(args=sys.argv if args is None else args)
+    """Init rclpy with ``args``, spin ``factory()``'s nodes, clean up; returns the exit code.
+
+    SIGINT and SIGTERM set a flag that the spin loop checks every 0.1 s, instead of rclpy's
+    handlers raising KeyboardInterrupt inside an executor callback (which aborts the
+    process with the EventsExecutor); nodes then get ``close()``d and destroyed normally.
+    """
+    stop = []
+    rclpy.init(args=sys.argv if args is None else args,
+               signal_handler_options=SignalHandlerOptions.NO)
+    previous = {sig: signal.signal(sig, lambda *_: stop.append(True))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     nodes: Sequence[Any] = ()
     code = 0
     try:
@@ -45,7 +56,8 @@ def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = No
         for node in nodes:
             executor.add_node(node)
         watched = [n for n in nodes if hasattr(n, "finished")]
-        while rclpy.ok() and not (watched and all(n.finished for n in watched)):
+        while (not stop and rclpy.ok()
+               and not (watched and all(n.finished for n in watched))):
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -59,4 +71,6 @@ def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = No
                 close()
             node.destroy_node()
         rclpy.try_shutdown()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     return code

@@ -36,8 +36,13 @@ from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.nodes.param_specs import ROBOT
 from phd_swarm.nodes.topics import robot_namespace
 
+#: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
+#: simple discovery among ~40 processes on 2 cores lost matches).
+AUTO_SERVER_PROCESSES = 16
+
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
-WALL_CLOCK_FIELDS = ("wall_duration_s", "real_time_factor", "run_dir", "started")
+WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
+                     "cpu_s", "cpu_s_per_robot")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -58,6 +63,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                                                            "lockstep")
     p.add_argument("--robots-per-process", type=int, default=1, metavar="P",
                    help="host P robot nodes per process (default 1)")
+    p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="off",
+                   help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
+                        f"{AUTO_SERVER_PROCESSES} processes)")
     p.add_argument("--no-record", action="store_true", help="do not write run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     return p.parse_args(argv)
@@ -124,6 +132,7 @@ class Swarm:
         self.env = env
         self.quiet = quiet
         self.procs: dict[str, subprocess.Popen] = {}
+        self.cpu: dict[str, float] = {}
         self._threads: list[threading.Thread] = []
         (run_dir / "logs").mkdir(exist_ok=True)
 
@@ -141,9 +150,19 @@ class Swarm:
         self.procs[name] = proc
         return proc
 
+    def cpu_seconds(self, name: str) -> float:
+        """User + system CPU time child ``name`` has used so far [s] (0 once it is gone)."""
+        try:
+            fields = Path(f"/proc/{self.procs[name].pid}/stat").read_text().rsplit(")", 1)[1]
+        except OSError:
+            return 0.0
+        utime, stime = fields.split()[11:13]
+        return (int(utime) + int(stime)) / os.sysconf("SC_CLK_TCK")
+
     def stop(self, name: str, grace: float = 10.0) -> int | None:
         """SIGINT child ``name``'s group, SIGKILL after ``grace`` s; returns its exit code."""
         proc = self.procs[name]
+        self.cpu[name] = max(self.cpu.get(name, 0.0), self.cpu_seconds(name))
         for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
             if proc.poll() is not None:
                 break
@@ -163,6 +182,8 @@ class Swarm:
     def stop_all(self) -> None:
         """Stop every child still running (robots in parallel), then clean Fast DDS shm."""
         running = [n for n, p in self.procs.items() if p.poll() is None]
+        for n in running:
+            self.cpu[n] = max(self.cpu.get(n, 0.0), self.cpu_seconds(n))
         for n in running:
             try:
                 os.killpg(self.procs[n].pid, signal.SIGINT)
@@ -199,9 +220,18 @@ def run(opts: argparse.Namespace) -> int:
     env.setdefault("ROS_DOMAIN_ID", "42")
     env["PYTHONUNBUFFERED"] = "1"
     common = ["--params-file", str(params)]
+    per = max(1, opts.robots_per_process)
+    processes = -(-s.robots // per) + 2 + int(record)
+    server = None
+    if opts.discovery_server == "on" or (opts.discovery_server == "auto"
+                                         and processes > AUTO_SERVER_PROCESSES):
+        server, address = _start_discovery_server(run_dir, env)
+        env["ROS_DISCOVERY_SERVER"] = address
+        env["ROS_SUPER_CLIENT"] = "TRUE"
     print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
           f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed {s.seed}, "
-          f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}",
+          f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
+          + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else ""),
           flush=True)
     print(f"run_swarm: results in {run_dir}/", flush=True)
     swarm = Swarm(run_dir, env, opts.quiet)
@@ -213,7 +243,6 @@ def run(opts: argparse.Namespace) -> int:
         if record:
             swarm.start("recorder", "phd_swarm.nodes.recorder", common)
         swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True)
-        per = max(1, opts.robots_per_process)
         for first in range(0, s.robots, per):
             ids = list(range(first, min(first + per, s.robots)))
             if per == 1:
@@ -226,6 +255,8 @@ def run(opts: argparse.Namespace) -> int:
         world = swarm.start("world", "phd_swarm.nodes.world", common, echo=True)
         while world.poll() is None:
             time.sleep(0.2)
+            for n in swarm.procs:
+                swarm.cpu[n] = max(swarm.cpu.get(n, 0.0), swarm.cpu_seconds(n))
             monitor = swarm.procs["monitor"]
             if monitor.poll() is not None and monitor.returncode != 0:
                 raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
@@ -254,29 +285,66 @@ def run(opts: argparse.Namespace) -> int:
         if record and "recorder" in swarm.procs:
             swarm.stop("recorder", grace=30.0)
         swarm.stop_all()
+        if server is not None:
+            server.terminate()
+            try:
+                server.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                server.kill()
     wall = time.monotonic() - started
-    return _report(run_dir, rc, wall, interrupted) or code
+    return _report(run_dir, rc, wall, interrupted, swarm.cpu) or code
 
 
-def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool) -> int:
+def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,
+                                                                          str]:
+    """Start ``fast-discovery-server`` on a free loopback port; returns it and its address."""
+    import socket
+
+    tool = shutil.which("fast-discovery-server", path=env.get("PATH"))
+    if tool is None:
+        raise ValueError("--discovery-server: fast-discovery-server is not on PATH "
+                         "(source scripts/env.sh)")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    (run_dir / "logs").mkdir(exist_ok=True)
+    log = open(run_dir / "logs" / "discovery_server.log", "w")  # noqa: SIM115
+    proc = subprocess.Popen([tool, "-i", "0", "-l", "127.0.0.1", "-p", str(port)], env=env,
+                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    time.sleep(0.5)
+    if proc.poll() is not None:
+        raise ValueError(f"the discovery server exited with code {proc.returncode}; see "
+                         f"{run_dir}/logs/discovery_server.log")
+    return proc, f"127.0.0.1:{port}"
+
+
+def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
+            cpu: dict[str, float]) -> int:
     path = run_dir / "summary.json"
     if not path.exists():
         print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
         return 130 if interrupted else 1
     summary = json.loads(path.read_text())
     s = rc.scenario
+    stepping = summary.pop("wall_duration_s")
+    robots_cpu = sum(v for k, v in cpu.items() if k.startswith("robot"))
     summary.update({"controller": rc.param("robot", "controller"),
                     "mode": rc.param("world", "mode"), "complete": summary["steps"] == s.steps,
                     "run_dir": str(run_dir), "wall_duration_s": wall,
-                    "real_time_factor": summary["sim_duration_s"] / wall if wall else None})
+                    "stepping_wall_s": stepping,
+                    "real_time_factor": (summary["sim_duration_s"] / stepping
+                                         if stepping else None),
+                    "cpu_s": {k: round(v, 2) for k, v in sorted(cpu.items())},
+                    "cpu_s_per_robot": robots_cpu / s.robots})
     path.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"run_swarm: {summary['steps']}/{s.steps} steps, {summary['sim_duration_s']:g} s sim "
-          f"in {wall:.1f} s wall ({summary['real_time_factor']:.2f} x real time); final OSPA "
+          f"in {stepping:.1f} s wall ({summary['real_time_factor'] or 0:.2f} x real time; "
+          f"{wall:.1f} s with start-up and shut-down); final OSPA "
           f"{summary['ospa_final']} m, targets est {summary['cardinality_est_final']} / true "
           f"{summary['cardinality_true_final']}; dead robots: "
           f"{summary['dead_robots'] or 'none'}", flush=True)
-    print(f"run_swarm: results in {run_dir}/ (run.mcap, summary.json, config.yaml, logs/)",
-          flush=True)
+    files = "run.mcap, summary.json" if (run_dir / "run.mcap").exists() else "summary.json"
+    print(f"run_swarm: results in {run_dir}/ ({files}, config.yaml, logs/)", flush=True)
     return 130 if interrupted else 0
 
 
