@@ -206,7 +206,10 @@ class MonitorNode(Node):
         truth = self.truth.pop(k)
         parts = ospa_components(truth, estimates, self.scenario.ospa_c, self.scenario.ospa_p)
         statuses = self.statuses.pop(k, {})
-        msgs = (float(np.mean([s.messages_received for s in statuses.values()]))
+        # Every message sent is received by its addressee, so the team's mean received
+        # per robot is its mean sent; the senders' counts are exact per step, while a
+        # receiver's count of step k could miss a message arriving after it reported.
+        msgs = (float(np.mean([s.messages_sent for s in statuses.values()]))
                 if statuses else 0.0)
         alive = self.alive.get(k, frozenset())
         row = {"step": k, "t": k * self.dt, "ospa": float(parts.distance),

@@ -126,7 +126,7 @@ class RobotNode(Node):
         self.rejections: dict[str, int] = defaultdict(int)
         self._heard = False
         self._sent = 0
-        self._received = 0
+        self._received: dict[int, int] = defaultdict(int)
         self._started = time.monotonic()
         self._peer_pubs: dict[tuple[int, str], object] = {}
         self._finished = -1
@@ -228,7 +228,7 @@ class RobotNode(Node):
         scan = self.pending.popleft()
         self.position = scan.sensor
         self.z = scan.z
-        self._sent = self._received = 0
+        self._sent = 0
         try:
             out = self.filter.start_step(scan.step, scan.sensor, self.power_weight, scan.z)
         except (ProtocolError, ValueError) as exc:
@@ -250,7 +250,7 @@ class RobotNode(Node):
             self._reject(kind, f"inbox/{kind}: {exc}")
             return
         self._heard = True
-        self._received += 1
+        self._received[msg.step] += 1
         self.filter.receive(msg)
         if self.filter.done:
             return
@@ -297,6 +297,8 @@ class RobotNode(Node):
         f = self.filter
         k = f.step
         self._finished = k
+        for old in [s for s in self._received if s < k]:
+            del self._received[old]
         d = decide(self.controller, self.grid, self.position, f.cell, f.bins, f.weights,
                    len(self.z) > 0, f.alpha, f.count)
         self.power_weight = d.power_weight
@@ -319,7 +321,7 @@ class RobotNode(Node):
             header=convert.header(k, self.dt, self.frame_id), state=RobotStatus.STATE_STEP_DONE,
             robot_id=self.robot_id, step=k, goal=Point(x=float(d.goal[0]), y=float(d.goal[1])),
             power_weight=float(d.power_weight), owned_bins=int(f.bins.size),
-            mass=float(np.sum(f.weights)), messages_received=self._received,
+            mass=float(np.sum(f.weights)), messages_received=self._received.pop(k, 0),
             messages_sent=self._sent, rejected_messages=sum(self.rejections.values()),
             dropped_messages=int(stats.get("dropped", 0)),
             timeouts=int(stats.get("timeouts", 0)), orphan_bins=int(stats.get("orphan_bins", 0)),

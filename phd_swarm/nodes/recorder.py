@@ -1,0 +1,354 @@
+"""Recorder: writes every phd_swarm topic of a run to an MCAP log, as rosbag2 would.
+
+Subscriptions are ``raw=True``: the callback gets the CDR bytes that arrived and hands them
+to :class:`phd_swarm.tools.mcap_log.LogWriter` without deserialising, so a message costs a
+clock read and an append to the current chunk (DESIGN.md "MCAP logs").
+
+Topics
+    With ``params_file`` set, the recorder loads that run config and subscribes at once to
+    every topic of :func:`phd_swarm.nodes.topics.run_topics` for the scenario's team, with
+    the table's reader QoS deepened to :data:`MIN_TABLE_DEPTH`; the world and the robots
+    count it among their ``observers`` before step 0. With ``discover`` on, it also polls
+    the graph every 0.5 s (wall time) and subscribes to new topics under ``/clock``,
+    ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table QoS if the topic is in
+    the table (robot topics match by their relative name) and its publishers' offers are
+    compatible with it, else adapted to the offers as rosbag2 does (reliable if every
+    publisher is, transient-local if every publisher is; depth 100; reliable and volatile
+    while no publisher is known).
+Times
+    ``log_time`` is the wall-clock time [ns since the Unix epoch] at which the callback
+    ran. ``publish_time`` is the message's own stamp when its first field is a
+    ``std_msgs/Header`` or a ``builtin_interfaces/Time`` (``/clock``): bytes 4-12 of the
+    CDR, read with one ``struct`` call, i.e. *sim time* [ns] for every phd_swarm message;
+    for the other types (``MarkerArray``) it is the receive time. rosbag2 puts the DDS
+    source timestamp there, which an rclpy callback only gets with a message-info argument,
+    and the EventsExecutor of rclpy 7.1 fails on such callbacks.
+Metadata
+    ``phd_swarm.config`` (``params_yaml``: the params file text, ``source``: its path) and
+    ``phd_swarm.run`` (``scenario``, ``seed``, ``robots``) when ``params_file`` is set;
+    ``phd_swarm.recorder`` (``output``, ``compression``, ``chunk_size``, ``discover``).
+Shutdown
+    :meth:`Recorder.close` (called by :func:`main` on Ctrl-C / SIGTERM) finishes the file
+    with its summary and footer and logs how many messages it wrote. A recorder killed with
+    SIGKILL leaves every finished chunk readable (:mod:`phd_swarm.tools.mcap_log`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+import struct
+import sys
+import time
+from collections.abc import Callable
+from functools import cache
+from typing import Any
+
+from rclpy.clock import Clock, ClockType
+from rclpy.logging import get_logger
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from phd_swarm.config import load_run_config
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.param_specs import RECORDER, SHARED
+from phd_swarm.nodes.params import ParameterError, declare
+from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.tools.mcap_log import (
+    SEPARATOR,
+    DefinitionNotFoundError,
+    LogError,
+    LogWriter,
+    message_definition,
+    qos_yaml,
+)
+
+#: Topics the graph poll records: /clock and everything under /world, /monitor, /robot_<n>.
+RECORDED = re.compile(r"^(?:/clock$|/world/|/monitor/|/robot_\d+/)")
+
+#: Graph poll period [s] (wall time).
+DISCOVER_PERIOD = 0.5
+
+#: Reader depth for topics outside the table.
+DEFAULT_DEPTH = 100
+
+#: Least reader depth on table topics: deeper than the table's readers, so that a burst
+#: (every robot's inbox traffic of a step) is not overwritten before the executor takes it.
+#: Depth does not affect QoS compatibility.
+MIN_TABLE_DEPTH = 1000
+
+_ROBOT_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/(.+)$")
+_STAMP_TYPES = ("std_msgs/Header", "builtin_interfaces/Time")
+_STAMP_LE = struct.Struct("<iI")
+_STAMP_BE = struct.Struct(">iI")
+
+
+def message_class(ros_type: str) -> type:
+    """The Python class of ``pkg/msg/Type`` (ValueError if it is not installed)."""
+    pkg, kind, name = (ros_type.split("/") + ["", ""])[:3]
+    try:
+        return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
+    except (ImportError, AttributeError, ValueError):
+        raise ValueError(f"no Python message class for {ros_type!r}") from None
+
+
+@cache
+def starts_with_stamp(ros_type: str) -> bool:
+    """Whether the first field of ``ros_type`` is a ``std_msgs/Header`` or a ``Time``.
+
+    Then the CDR bytes 4-12 (after the 4-byte encapsulation header) are the stamp's
+    ``int32 sec`` and ``uint32 nanosec``.
+    """
+    try:
+        text = message_definition(ros_type)
+    except DefinitionNotFoundError:
+        return False
+    for line in text.split(f"\n{SEPARATOR}\n", 1)[0].splitlines():
+        words = line.split("#", 1)[0].split(None, 1)
+        if len(words) < 2 or "=" in words[1]:
+            continue  # blank, comment or constant
+        return words[0] in (*_STAMP_TYPES, "Header")
+    return False
+
+
+def table_spec(topic: str) -> tuple[str, str] | None:
+    """(type, QoS name) of ``topic`` in :mod:`phd_swarm.nodes.topics`, or None."""
+    if topic in T.TEAM_TOPICS:
+        typ, qos_name, *_ = T.TEAM_TOPICS[topic]
+        return typ, qos_name
+    match = _ROBOT_TOPIC.match(topic)
+    if match and match.group(1) in T.ROBOT_TOPICS:
+        typ, qos_name, *_ = T.ROBOT_TOPICS[match.group(1)]
+        return typ, qos_name
+    return None
+
+
+def adapted_qos(offers: list[Any]) -> QoSProfile:
+    """A reader profile that matches every offered profile in ``offers`` (rosbag2's rule).
+
+    Reliable if every publisher is reliable, transient-local if every publisher is; keep
+    last :data:`DEFAULT_DEPTH`. Without offers: reliable and volatile.
+    """
+    reliable = all(o.reliability == ReliabilityPolicy.RELIABLE for o in offers)
+    latched = bool(offers) and all(o.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                   for o in offers)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=DEFAULT_DEPTH,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+
+def reader_qos(qos_name: str) -> QoSProfile:
+    """The recorder's reader profile for table QoS ``qos_name``: the table's, deepened."""
+    table = subscription_qos(qos_name)
+    return QoSProfile(history=table.history, depth=max(table.depth, MIN_TABLE_DEPTH),
+                      reliability=table.reliability, durability=table.durability)
+
+
+def accepts(reader: QoSProfile, offers: list[Any]) -> bool:
+    """Whether a ``reader`` profile matches every offered profile in ``offers``.
+
+    Only reliability and durability decide it here: a reliable reader needs reliable
+    writers, a transient-local reader transient-local writers (deadline and liveliness are
+    left at their defaults by phd_swarm).
+    """
+    for offer in offers:
+        if reader.reliability == ReliabilityPolicy.RELIABLE \
+                and offer.reliability != ReliabilityPolicy.RELIABLE:
+            return False
+        if reader.durability == DurabilityPolicy.TRANSIENT_LOCAL \
+                and offer.durability != DurabilityPolicy.TRANSIENT_LOCAL:
+            return False
+    return True
+
+
+class Recorder(Node):
+    """The recorder (node ``recorder``); see the module docstring.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``, ...).
+
+    Raises
+    ------
+    ParameterError
+        For a bad parameter, a ``params_file`` that cannot be loaded or an ``output`` that
+        cannot be created.
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__("recorder", **kwargs)
+        self.params = declare(self, SHARED + RECORDER)
+        run_config = None
+        if self.params["params_file"]:
+            try:
+                run_config = load_run_config(self.params["params_file"])
+            except ValueError as exc:
+                raise ParameterError(f"node {self.get_fully_qualified_name()}: parameter "
+                                     f"params_file: {exc}") from None
+        try:
+            self.log = LogWriter(self.params["output"], compression=self.params["compression"],
+                                 chunk_size=self.params["chunk_size"])
+        except LogError as exc:
+            raise ParameterError(f"node {self.get_fully_qualified_name()}: parameter output: "
+                                 f"{exc}") from None
+        self._subs: dict[str, Any] = {}
+        self._skipped: set[str] = set()
+        self.log.add_metadata("phd_swarm.recorder", {
+            "output": str(self.params["output"]),
+            "compression": self.params["compression"],
+            "chunk_size": str(self.params["chunk_size"]),
+            "discover": str(self.params["discover"]).lower(),
+        })
+        if run_config is not None:
+            self._record_config(run_config)
+        self._timer = None
+        if self.params["discover"]:
+            self._timer = self.create_timer(DISCOVER_PERIOD, self.discover,
+                                            clock=Clock(clock_type=ClockType.STEADY_TIME))
+            self.discover()
+        self.get_logger().info(f"recording {len(self._subs)} topics to {self.log.path}"
+                               + (" (discovering more)" if self._timer else ""))
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """Topics subscribed so far."""
+        return tuple(self._subs)
+
+    @property
+    def message_count(self) -> int:
+        """Messages written so far."""
+        return self.log.message_count
+
+    def _record_config(self, rc: Any) -> None:
+        """Store the params file and the run's identity; subscribe to the run's topics."""
+        path = self.params["params_file"]
+        with open(path) as f:
+            self.log.add_metadata("phd_swarm.config", {"params_yaml": f.read(),
+                                                       "source": str(rc.source)})
+        s = rc.scenario
+        self.log.add_metadata("phd_swarm.run", {"scenario": s.name, "seed": str(s.seed),
+                                                "robots": str(s.robots)})
+        for spec in T.run_topics(range(s.robots)):
+            self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
+                           qos_yaml(publisher_qos(spec.qos)))
+
+    def subscribe(self, topic: str, ros_type: str, qos: QoSProfile,
+                  offered_qos_yaml: str = "") -> bool:
+        """Record ``topic`` of type ``ros_type`` (``pkg/msg/Type``); False if impossible.
+
+        A type whose Python class or ``.msg`` definition is not installed is skipped with
+        one warning. Subscribing twice to a topic does nothing.
+        """
+        if topic in self._subs:
+            return True
+        if topic in self._skipped:
+            return False
+        try:
+            msg_class = message_class(ros_type)
+            self.log.add_channel(topic, ros_type, offered_qos_yaml)
+        except (ValueError, DefinitionNotFoundError) as exc:
+            self._skipped.add(topic)
+            self.get_logger().warning(f"not recording {topic} ({ros_type}): {exc}")
+            return False
+        callback = self._callback(topic, starts_with_stamp(ros_type))
+        self._subs[topic] = self.create_subscription(msg_class, topic, callback, qos, raw=True)
+        return True
+
+    def _callback(self, topic: str, stamped: bool) -> Callable[[bytes], None]:
+        """The subscription callback of ``topic``: time stamps and bytes to the log."""
+        write = self.log.write
+        now = time.time_ns
+
+        if not stamped:
+            def on_message(data: bytes) -> None:
+                t = now()
+                write(topic, data, t, t)
+            return on_message
+
+        def on_stamped(data: bytes) -> None:
+            t = now()
+            # Odd encapsulation kinds (CDR_LE = 1, PL_CDR_LE = 3, ...) are little-endian.
+            sec, nsec = (_STAMP_LE if data[1] & 1 else _STAMP_BE).unpack_from(data, 4)
+            write(topic, data, t, sec * 1_000_000_000 + nsec if sec >= 0 else t)
+        return on_stamped
+
+    def discover(self) -> None:
+        """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._subs or topic in self._skipped or not RECORDED.match(topic):
+                continue
+            if len(types) != 1:
+                self.get_logger().warning(f"{topic} has several types {types}; recording "
+                                          f"{types[0]}")
+            offers = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
+            spec = table_spec(topic)
+            if spec is not None and spec[0] == types[0] \
+                    and accepts(subscription_qos(spec[1]), offers):
+                qos = reader_qos(spec[1])
+                offered = offers or [publisher_qos(spec[1])]
+            else:
+                qos = adapted_qos(offers)
+                offered = offers
+            if self.subscribe(topic, types[0], qos, "\n".join(map(qos_yaml, offered))):
+                self.get_logger().info(f"recording {topic} ({types[0]})")
+
+    def close(self) -> None:
+        """Stop recording and finish the file (summary, footer); idempotent.
+
+        Messages that reached a subscription but were not yet taken by the executor (the
+        last ones before Ctrl-C) are taken and written first, so a clean stop loses nothing
+        that DDS delivered.
+        """
+        if self.log.closed:
+            return
+        if self._timer is not None:
+            self.destroy_timer(self._timer)
+        drained = 0
+        try:
+            for sub in self._subs.values():
+                drained += self._drain(sub)
+        finally:
+            for sub in self._subs.values():
+                self.destroy_subscription(sub)
+            self.log.close()
+        # After Ctrl-C the context is already shut down and the node's logger could not
+        # publish to /rosout; a logger of another name only prints.
+        logger = self.get_logger() if self.context.ok() else get_logger("recorder.close")
+        logger.info(f"wrote {self.log.message_count} messages ({drained} taken at close) on "
+                    f"{len(self._subs)} topics to {self.log.path}")
+
+    @staticmethod
+    def _drain(sub: Any) -> int:
+        """Take and record what is waiting in ``sub``; returns how many messages.
+
+        Uses the subscription handle's ``take_message``, as rclpy's executors do; it works
+        after the context was shut down, until the subscription is destroyed.
+        """
+        n = 0
+        while True:
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+            except RuntimeError:  # InvalidHandle or RCLError: nothing more can be taken
+                return n
+            if taken is None:
+                return n
+            sub.callback(taken[0])
+            n += 1
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the recorder (``python -m phd_swarm.nodes.recorder --ros-args -p output:=X``).
+
+    Jazzy's init / spin / ``finally: close, destroy, try_shutdown`` pattern, as
+    :func:`phd_swarm.nodes.spin.spin_nodes`, with the EventsExecutor.
+    """
+    from phd_swarm.nodes.spin import spin_nodes
+
+    return spin_nodes(lambda: [Recorder()], args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,296 @@
+"""Recorder: in-process recording read back, discovery, and clean / killed processes."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point
+from mcap.reader import make_reader
+from rclpy.duration import Duration
+from rclpy.parameter import Parameter
+from rclpy.qos import (
+    DurabilityPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_profile_sensor_data,
+)
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Header, String
+from visualization_msgs.msg import Marker, MarkerArray
+
+from phd_swarm.config import load_run_config
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.params import ParameterError
+from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.recorder import (
+    Recorder,
+    accepts,
+    adapted_qos,
+    starts_with_stamp,
+    table_spec,
+)
+from phd_swarm.tools.mcap_log import open_log, read_messages, read_metadata, summarize
+from phd_swarm_msgs.msg import RobotStatus, TargetSet
+
+ROOT = Path(__file__).resolve().parents[2]
+SEC = 1_000_000_000
+
+
+def _config(tmp_path: Path, robots: int = 1, **recorder) -> Path:
+    """A resolved run config for ``robots`` robots with recorder parameters ``recorder``."""
+    rc = load_run_config(ROOT / "config" / "dames_static.yaml")
+    rc = rc.with_overrides(scenario=dataclasses.replace(rc.scenario, robots=robots),
+                           recorder=recorder)
+    return rc.write_params(tmp_path / "config.yaml")
+
+
+def _recorder(ros, **params) -> Recorder:
+    overrides = [Parameter(name, value=value) for name, value in params.items()]
+    return ros.add(Recorder(context=ros.context, parameter_overrides=overrides))
+
+
+def _stamp(step: int) -> Header:
+    return Header(stamp=Time(sec=step, nanosec=500), frame_id="map")
+
+
+def _status(step: int, robot_id: int = 0) -> RobotStatus:
+    return RobotStatus(header=_stamp(step), state=RobotStatus.STATE_STEP_DONE,
+                       robot_id=robot_id, step=step, goal=Point(x=1.0 + step, y=2.0))
+
+
+def _matched(ros, pubs, timeout: float = 20.0) -> None:
+    assert ros.spin_until(lambda: all(p.get_subscription_count() > 0 for p in pubs),
+                          timeout=timeout), "the recorder's subscriptions did not match"
+
+
+# ------------------------------------------------------------------------ pure helpers
+def test_stamp_detection_and_table_lookup():
+    assert starts_with_stamp("phd_swarm_msgs/msg/RobotStatus")
+    assert starts_with_stamp("phd_swarm_msgs/msg/ParticleTransfer")  # constants after header
+    assert starts_with_stamp("rosgraph_msgs/msg/Clock")
+    assert not starts_with_stamp("visualization_msgs/msg/MarkerArray")
+    assert not starts_with_stamp("geometry_msgs/msg/Point")
+    assert table_spec("/robot_12/inbox/eta_total") == ("phd_swarm_msgs/msg/EtaTotal", "INBOX")
+    assert table_spec("/world/truth") == ("phd_swarm_msgs/msg/TargetSet", "STEP")
+    assert table_spec("/robot_1/unknown") is None and table_spec("/robot_x/status") is None
+
+
+def test_qos_follows_the_publishers_offers():
+    reliable = QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    best_effort = qos_profile_sensor_data
+    both = adapted_qos([reliable, best_effort])
+    assert (both.reliability, both.durability) == (ReliabilityPolicy.BEST_EFFORT,
+                                                   DurabilityPolicy.VOLATILE)
+    latched = adapted_qos([reliable])
+    assert (latched.reliability, latched.durability, latched.depth) == (
+        ReliabilityPolicy.RELIABLE, DurabilityPolicy.TRANSIENT_LOCAL, 100)
+    assert adapted_qos([]).reliability == ReliabilityPolicy.RELIABLE
+    assert accepts(subscription_qos("STEP"), [publisher_qos("STEP")])
+    assert not accepts(subscription_qos("STEP"), [QoSProfile(depth=10)])  # volatile writer
+    assert not accepts(subscription_qos("CLOCK"), [best_effort])
+
+
+# ------------------------------------------------------------------------ in process
+@pytest.mark.ros
+def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
+    cfg = _config(tmp_path)
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
+                    compression="lz4")
+    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS)
+    talker = ros.node("talker")
+    truth = talker.create_publisher(TargetSet, T.WORLD_TRUTH, publisher_qos("STEP"))
+    status = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"),
+                                     publisher_qos("STEP"))
+    clock = talker.create_publisher(Clock, T.CLOCK, publisher_qos("CLOCK"))
+    _matched(ros, [truth, status, clock])
+
+    before = time.time_ns()
+    for k in range(5):
+        clock.publish(Clock(clock=Time(sec=k)))
+        truth.publish(TargetSet(header=_stamp(k), source_id=0xFFFFFFFF, step=k, ids=[3, 4],
+                                positions=[Point(x=1.0), Point(y=float(k))]))
+        status.publish(_status(k))
+    assert ros.spin_until(lambda: rec.message_count == 15, timeout=10.0), rec.message_count
+    after = time.time_ns()
+    rec.close()
+    rec.close()
+
+    info = summarize(out)
+    assert not info.truncated and info.message_count == 15
+    assert {t: s.message_count for t, s in info.topics.items() if s.message_count} == {
+        "/clock": 5, "/world/truth": 5, "/robot_0/status": 5}
+    assert len(info.topics) == len(rec.topics)
+    records = list(read_messages(out))
+    assert all(before <= r.log_time_ns <= after for r in records)
+    by_topic: dict[str, list] = {}
+    for r in records:
+        by_topic.setdefault(r.topic, []).append(r)
+    assert [r.msg.step for r in by_topic["/robot_0/status"]] == list(range(5))
+    assert [r.msg.goal.x for r in by_topic["/robot_0/status"]] == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert [r.msg.positions[1].y for r in by_topic["/world/truth"]] == [0.0, 1.0, 2.0, 3.0,
+                                                                        4.0]
+    # publish time: the header stamp (sim time), or the clock's value
+    assert [r.publish_time_ns for r in by_topic["/world/truth"]] == [
+        k * SEC + 500 for k in range(5)]
+    assert [r.publish_time_ns for r in by_topic["/clock"]] == [k * SEC for k in range(5)]
+
+    meta = read_metadata(out)
+    assert meta["phd_swarm.config"] == {"params_yaml": cfg.read_text(), "source": str(cfg)}
+    assert meta["phd_swarm.run"] == {"scenario": "dames_static", "seed": "1", "robots": "1"}
+    assert meta["phd_swarm.recorder"]["compression"] == "lz4"
+    with open(out, "rb") as f:
+        channels = {c.topic: c for c in make_reader(f).get_summary().channels.values()}
+    (offer,) = yaml.safe_load(channels["/robot_0/status"].metadata["offered_qos_profiles"])
+    assert (offer["durability"], offer["depth"]) == ("transient_local",
+                                                     publisher_qos("STEP").depth)
+
+
+@pytest.mark.ros
+def test_discovers_new_topics_with_table_or_adapted_qos(ros, tmp_path):
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out))
+    talker = ros.node("talker")
+    markers = talker.create_publisher(MarkerArray, T.WORLD_MARKERS,
+                                      publisher_qos("OBSERVATION"))
+    custom = talker.create_publisher(String, "/robot_2/custom", QoSProfile(depth=10))
+    volatile_status = talker.create_publisher(RobotStatus, "/robot_1/status",
+                                              QoSProfile(depth=10))
+    talker.create_publisher(String, "/elsewhere/chatter", QoSProfile(depth=10))
+    wanted = {T.WORLD_MARKERS, "/robot_2/custom", "/robot_1/status"}
+    assert ros.spin_until(lambda: wanted <= set(rec.topics), timeout=10.0), rec.topics
+    _matched(ros, [markers, custom, volatile_status])
+    rec.discover()
+    assert set(rec.topics) == wanted
+
+    markers.publish(MarkerArray(markers=[Marker(ns="robots", id=1)]))
+    custom.publish(String(data="hello"))
+    volatile_status.publish(_status(3, robot_id=1))
+    assert ros.spin_until(lambda: rec.message_count == 3, timeout=10.0)
+    rec.close()
+
+    got = {r.topic: r for r in read_messages(out)}
+    assert got["/robot_2/custom"].msg.data == "hello"
+    assert got["/robot_1/status"].msg.robot_id == 1
+    assert got["/robot_1/status"].publish_time_ns == 3 * SEC + 500
+    marker = got[T.WORLD_MARKERS]
+    assert marker.msg.markers[0].ns == "robots"
+    assert marker.publish_time_ns == marker.log_time_ns  # no stamp: receive time
+    with open(out, "rb") as f:
+        channels = {c.topic: c for c in make_reader(f).get_summary().channels.values()}
+    (offer,) = yaml.safe_load(channels["/robot_1/status"].metadata["offered_qos_profiles"])
+    assert (offer["reliability"], offer["durability"]) == ("reliable", "volatile")
+
+
+@pytest.mark.ros
+def test_bad_params_file_or_output_is_a_parameter_error(ros, tmp_path):
+    out = tmp_path / "run.mcap"
+    with pytest.raises(ParameterError, match="params_file: .*nowhere.yaml"):
+        Recorder(context=ros.context, parameter_overrides=[
+            Parameter("output", value=str(out)),
+            Parameter("params_file", value=str(tmp_path / "nowhere.yaml"))])
+    assert not out.exists()
+    with pytest.raises(ParameterError, match="parameter output: .*no_dir"):
+        Recorder(context=ros.context, parameter_overrides=[
+            Parameter("output", value=str(tmp_path / "no_dir" / "run.mcap"))])
+
+
+# ------------------------------------------------------------------------ processes
+def _start(children, ros, argv: list[str]) -> subprocess.Popen:
+    return children.start(argv, env={"ROS_DOMAIN_ID": str(ros.domain_id)}, cwd=str(ROOT))
+
+
+def _recorder_argv(cfg: Path, out: Path, *extra: str) -> list[str]:
+    return [sys.executable, "-m", "phd_swarm.nodes.recorder", "--ros-args",
+            "--params-file", str(cfg), "-p", f"params_file:={cfg}", "-p", f"output:={out}",
+            *extra]
+
+
+def _publish_statuses(ros, n: int):
+    """Publish ``n`` statuses of robot 0 in a burst and wait until the recorder has them.
+
+    The writer keeps all ``n`` (the table's STEP writer keeps 8, one per step in a run).
+    """
+    talker = ros.node("talker")
+    deep = QoSProfile(depth=n, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    pub = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"), deep)
+    _matched(ros, [pub], timeout=30.0)
+    for k in range(n):
+        pub.publish(_status(k))
+    assert pub.wait_for_all_acked(Duration(seconds=10))
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_stop_signal_closes_the_file_with_summary_and_footer(ros, children, tmp_path, sig):
+    out = tmp_path / "run.mcap"
+    cfg = _config(tmp_path, discover=False)
+    proc = _start(children, ros, _recorder_argv(cfg, out))
+    _publish_statuses(ros, 50)
+    os.killpg(proc.pid, sig)
+    stdout, stderr = proc.communicate(timeout=20.0)
+    assert proc.returncode == 0, stderr
+    assert "wrote 50 messages" in stderr, stderr
+    with open(out, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.statistics.message_count == 50
+    with open_log(out) as log:
+        assert not log.truncated
+        assert [r.msg.step for r in log.messages(topics=["/robot_0/status"])] == \
+            list(range(50))
+    assert read_metadata(out)["phd_swarm.run"]["robots"] == "1"
+
+
+@pytest.mark.ros
+def test_sigkill_leaves_every_finished_chunk_readable(ros, children, tmp_path):
+    out = tmp_path / "run.mcap"
+    cfg = _config(tmp_path, discover=False)
+    proc = _start(children, ros, _recorder_argv(cfg, out, "-p", "chunk_size:=1024"))
+    n = 200
+    _publish_statuses(ros, n)
+    # A 1 KiB chunk holds < 10 statuses: once they are processed, all but the last few are
+    # in finished chunks on disk.
+    assert ros.spin_until(lambda: summarize(out).message_count >= n - 20, timeout=20.0)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=10.0)
+
+    with open_log(out) as log:
+        assert log.truncated
+        steps = [r.msg.step for r in log.messages()]
+    assert n - 20 <= len(steps) <= n and steps == list(range(len(steps)))
+    info = summarize(out)
+    assert info.truncated and info.topics["/robot_0/status"].message_count == len(steps)
+    assert read_metadata(out)["phd_swarm.config"]["source"] == str(cfg)
+
+
+@pytest.mark.ros
+def test_record_sh_checks_the_config_and_records(ros, children, tmp_path):
+    out = tmp_path / "run.mcap"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("/**: {ros__parameters: {scenario: {preset: nope}}}\n")
+    check = subprocess.run(["bash", str(ROOT / "scripts/record.sh"), str(out), str(bad)],
+                           capture_output=True, text=True, timeout=60, cwd=str(tmp_path))
+    assert check.returncode != 0 and str(bad) in check.stderr and not out.exists()
+
+    cfg = _config(tmp_path, discover=False, output=str(tmp_path / "elsewhere.mcap"))
+    proc = _start(children, ros, ["bash", str(ROOT / "scripts/record.sh"), str(out),
+                                  str(cfg), "-p", "recorder:compression:=none"])
+    _publish_statuses(ros, 3)
+    children.stop(proc)
+    assert proc.returncode == 0, proc.stderr.read()
+    info = summarize(out)
+    assert not info.truncated and info.topics["/robot_0/status"].message_count == 3
+    meta = read_metadata(out)
+    assert meta["phd_swarm.config"]["source"] == str(cfg)
+    assert meta["phd_swarm.recorder"]["compression"] == "none"
