@@ -66,6 +66,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", default="10,30,50", help="team sizes, comma separated")
     parser.add_argument("--duration", type=float, default=60.0, help="sim seconds per run")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--layouts", default="processes,one",
+                        help="processes (one per robot) and/or one (all in one process)")
     parser.add_argument("--quick", action="store_true", help="sizes 4,8 and 10 s of sim time")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results")
     opts = parser.parse_args(argv)
@@ -77,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{'msgs/robot':>10}  dead")
     with tempfile.TemporaryDirectory(prefix="phd-swarm-bench-") as tmp:
         for n in sizes:
-            for per in (1, n):
+            layouts = opts.layouts.split(",")
+            for per in [p for p, name in ((1, "processes"), (n, "one")) if name in layouts]:
                 r = run_once(n, per, duration, opts.seed, Path(tmp), domain)
                 rows.append(r)
                 print(f"{n:>6} {r['layout']:<26} {r['real_time_factor']:>6.2f} "

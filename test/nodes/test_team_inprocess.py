@@ -38,3 +38,25 @@ def test_lockstep_team_equals_in_memory_engine_and_ospa_falls(tmp_path):
     assert len(series) == scenario.steps == 64
     ospa = np.array([r["ospa"] for r in series])
     assert ospa[:8].mean() > ospa[-8:].mean() + 2.0, ospa
+
+
+@pytest.mark.ros
+def test_realtime_mode_steps_on_the_clock_and_the_team_keeps_up(tmp_path):
+    import time
+
+    from phd_swarm.testing import InProcessRos
+
+    scenario = small_static_scenario(robots=3, steps=24)
+    with InProcessRos(executor="events") as ros:
+        world, monitor, robots = start_swarm(ros, tmp_path, scenario, mode="realtime",
+                                             realtime_factor=5.0)
+        assert ros.spin_until(lambda: world._phase == "stepping", timeout=60.0)
+        started = time.monotonic()
+        assert ros.spin_until(lambda: world._phase in ("lingering", "finished"),
+                              timeout=60.0)
+        elapsed = time.monotonic() - started
+        assert ros.spin_until(lambda: monitor.done, timeout=60.0)
+    # 24 steps of 0.5 s at 5 x real time take 2.4 s of wall time, whatever the robots do.
+    assert 2.0 < elapsed < 6.0, elapsed
+    assert len(monitor.series) == scenario.steps
+    assert world.dead == set()
