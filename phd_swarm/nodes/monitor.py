@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
@@ -305,6 +306,9 @@ class MonitorNode(Node):
             Path(path).write_text(json.dumps(self.summary(), indent=2) + "\n")
             self.get_logger().info(f"monitor: summary written to {path}")
         if self.params["exit_when_done"]:
+            # The last step's messages must reach the recorder before this process exits.
+            for pub in (self.metrics_pub, self.estimates_pub):
+                pub.wait_for_all_acked(Duration(seconds=5.0))
             self.finished = True
 
 

@@ -27,6 +27,7 @@ import time
 import numpy as np
 from geometry_msgs.msg import PoseStamped
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock as ClockMsg
 from visualization_msgs.msg import MarkerArray
@@ -224,6 +225,8 @@ class WorldNode(Node):
                            f"{self.params['step_timeout']} s")
                 self._maybe_finish_step()
         elif self._phase == "lingering" and waited >= self.params["linger"]:
+            for pub in (self.team_pub, self.truth_pub, self.clock_pub):
+                pub.wait_for_all_acked(Duration(seconds=5.0))
             self._phase = "finished"
             self.finished = True
 
