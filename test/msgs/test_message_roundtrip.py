@@ -76,7 +76,8 @@ def test_roundtrip_preserves_every_field(msg):
     assert data[:2] in (b"\x00\x01", b"\x00\x00")  # CDR encapsulation header
     back = deserialize_message(data, type(msg))
     assert back == msg
-    assert serialize_message(back) == data
+    # Not byte equality: CDR alignment padding is not guaranteed to be zeroed.
+    assert deserialize_message(serialize_message(back), type(msg)) == msg
 
 
 def test_every_message_type_has_an_example():

@@ -20,12 +20,37 @@ def test_lockstep_team_equals_in_memory_engine_and_ospa_falls(tmp_path):
     scenario = small_static_scenario()
     with InProcessRos(executor="events") as ros:
         world, monitor, robots = start_swarm(ros, tmp_path, scenario)
+        probe = ros.node("graph_probe")
+        assert ros.spin_until(lambda: monitor.next_step >= 2, timeout=60.0)
+        graph = dict(probe.get_topic_names_and_types())
         assert ros.spin_until(lambda: monitor.done, timeout=240.0), (
             f"monitor stopped at step {monitor.next_step} of {scenario.steps}")
         assert world.dead == set() and world.rejected == 0
         assert sum(sum(r.rejections.values()) for r in robots) == 0
         images = monitor.images
         series = monitor.series
+
+    expected = {"/clock": "rosgraph_msgs/msg/Clock",
+                "/world/truth": "phd_swarm_msgs/msg/TargetSet",
+                "/world/robots": "phd_swarm_msgs/msg/TeamState",
+                "/world/markers": "visualization_msgs/msg/MarkerArray",
+                "/monitor/metrics": "phd_swarm_msgs/msg/TeamMetrics",
+                "/monitor/estimates": "phd_swarm_msgs/msg/TargetSet",
+                "/monitor/markers": "visualization_msgs/msg/MarkerArray",
+                **{f"/robot_{i}/{rel}": typ for i in range(scenario.robots)
+                   for rel, typ in (("measurements", "phd_swarm_msgs/msg/MeasurementSet"),
+                                    ("pose", "geometry_msgs/msg/PoseStamped"),
+                                    ("status", "phd_swarm_msgs/msg/RobotStatus"),
+                                    ("goal", "geometry_msgs/msg/PoseStamped"),
+                                    ("cell", "phd_swarm_msgs/msg/CellPolygon"),
+                                    ("density", "phd_swarm_msgs/msg/DensityGrid"),
+                                    ("estimates", "phd_swarm_msgs/msg/TargetSet"),
+                                    ("inbox/state", "phd_swarm_msgs/msg/RobotState"),
+                                    ("inbox/cell", "phd_swarm_msgs/msg/CellPolygon"),
+                                    ("inbox/particles",
+                                     "phd_swarm_msgs/msg/ParticleTransfer"))}}
+    missing = {t: typ for t, typ in expected.items() if typ not in graph.get(t, [])}
+    assert not missing, f"topics missing from the graph while the swarm runs: {missing}"
 
     engine = InMemoryEngine(scenario, "phd")
     worst = 0.0

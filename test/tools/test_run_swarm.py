@@ -42,41 +42,10 @@ def _finish(children, proc, timeout: float = 240.0) -> str:
     return out
 
 
-def _graph(domain_id: int, timeout: float = 60.0) -> dict[str, list[str]]:
-    """Topic names and types seen by a node in the swarm's domain once all are there."""
-    from phd_swarm.testing import InProcessRos
-
-    wanted = {"/clock": "rosgraph_msgs/msg/Clock",
-              "/world/truth": "phd_swarm_msgs/msg/TargetSet",
-              "/world/robots": "phd_swarm_msgs/msg/TeamState",
-              "/world/markers": "visualization_msgs/msg/MarkerArray",
-              "/monitor/metrics": "phd_swarm_msgs/msg/TeamMetrics",
-              "/monitor/markers": "visualization_msgs/msg/MarkerArray",
-              **{f"/robot_{i}/{rel}": typ for i in range(ROBOTS) for rel, typ in (
-                  ("measurements", "phd_swarm_msgs/msg/MeasurementSet"),
-                  ("status", "phd_swarm_msgs/msg/RobotStatus"),
-                  ("goal", "geometry_msgs/msg/PoseStamped"),
-                  ("density", "phd_swarm_msgs/msg/DensityGrid"),
-                  ("inbox/state", "phd_swarm_msgs/msg/RobotState"),
-                  ("inbox/particles", "phd_swarm_msgs/msg/ParticleTransfer"))}}
-    with InProcessRos(domain_id=domain_id) as ros:
-        node = ros.node("graph_probe")
-        seen: dict[str, list[str]] = {}
-
-        def complete() -> bool:
-            seen.update(dict(node.get_topic_names_and_types()))
-            return all(t in seen and typ in seen[t] for t, typ in wanted.items())
-
-        assert ros.spin_until(complete, timeout=timeout, step=0.2), sorted(
-            set(wanted) - set(seen))
-    return seen
-
-
 @pytest.mark.ros
 @pytest.mark.slow
 def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, children):
     first = _start(children, tmp_path, "a")
-    _graph(children.domain_id)
     out = _finish(children, first)
     assert "results in" in out
     second = _start(children, tmp_path, "b")
