@@ -143,22 +143,7 @@ class ChildProcesses:
 
     def stop(self, proc: subprocess.Popen, grace: float = 5.0) -> None:
         """SIGINT the process group, then SIGKILL it after ``grace`` seconds."""
-        if proc.poll() is None:
-            for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
-                try:
-                    os.killpg(proc.pid, sig)
-                except ProcessLookupError:
-                    break
-                try:
-                    proc.wait(timeout=wait)
-                    break
-                except subprocess.TimeoutExpired:
-                    continue
-        # Reap the group even if the leader already exited.
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
+        stop_process_group(proc, grace)
 
     def __enter__(self) -> ChildProcesses:
         return self
@@ -167,6 +152,30 @@ class ChildProcesses:
         for proc in self.procs:
             self.stop(proc)
         clean_fastdds_shm()
+
+
+def stop_process_group(proc: subprocess.Popen, grace: float = 5.0) -> int | None:
+    """SIGINT ``proc``'s process group, SIGKILL it after ``grace`` s; returns the exit code.
+
+    The group is killed in the end even if its leader already exited, so no child of it
+    (e.g. the Python under a shell script) survives.
+    """
+    if proc.poll() is None:
+        for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
+            try:
+                os.killpg(proc.pid, sig)
+            except ProcessLookupError:
+                break
+            try:
+                proc.wait(timeout=wait)
+                break
+            except subprocess.TimeoutExpired:
+                continue
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    return proc.poll()
 
 
 def clean_fastdds_shm() -> None:

@@ -35,6 +35,7 @@ from typing import IO, Any
 from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.nodes.param_specs import ROBOT
 from phd_swarm.nodes.topics import robot_namespace
+from phd_swarm.testing import clean_fastdds_shm, stop_process_group
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
 #: simple discovery among ~40 processes on 2 cores lost matches).
@@ -163,21 +164,7 @@ class Swarm:
         """SIGINT child ``name``'s group, SIGKILL after ``grace`` s; returns its exit code."""
         proc = self.procs[name]
         self.cpu[name] = max(self.cpu.get(name, 0.0), self.cpu_seconds(name))
-        for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
-            if proc.poll() is not None:
-                break
-            try:
-                os.killpg(proc.pid, sig)
-                proc.wait(timeout=wait)
-            except ProcessLookupError:
-                break
-            except subprocess.TimeoutExpired:
-                continue
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
-        return proc.poll()
+        return stop_process_group(proc, grace)
 
     def stop_all(self) -> None:
         """Stop every child still running (robots in parallel), then clean Fast DDS shm."""
@@ -193,10 +180,7 @@ class Swarm:
             self.stop(n, grace=5.0)
         for t in self._threads:
             t.join(timeout=2.0)
-        tool = shutil.which("fastdds")
-        if tool:
-            subprocess.run([tool, "shm", "clean"], stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=30, check=False)
+        clean_fastdds_shm()
 
 
 def run(opts: argparse.Namespace) -> int:
