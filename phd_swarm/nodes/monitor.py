@@ -7,9 +7,9 @@ declared dead during step k is not waited for), it
 
 1. adds the windows into the team PHD image (each bin is owned by exactly one robot, so the
    sum is the union of the robots' bins, exact in float64);
-2. extracts the team estimate (:func:`phd_swarm.core.extraction.extract_targets`, Dames
-   Sec. IV) and the expected number of targets (the total mass, Dames eq. 2);
-3. computes OSPA (c, p from the scenario; Dames eq. 12) against the truth of step k;
+2. scores it against the truth of step k (:func:`phd_swarm.core.scoring.score_step`): the
+   team estimate (Dames Sec. IV), the expected number of targets (the total mass, Dames
+   eq. 2) and OSPA (c, p from the scenario; Dames eq. 12);
 4. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` and
    ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
@@ -32,8 +32,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
-from phd_swarm.core.extraction import expected_cardinality, extract_targets
-from phd_swarm.core.ospa import ospa_components
+from phd_swarm.core.scoring import score_step
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
@@ -203,9 +202,10 @@ class MonitorNode(Node):
                 convert.add_density(image, have[rid], self.grid)
             except convert.InvalidMessage as exc:
                 self._reject(f"density of robot {rid} at step {k}: {exc}")
-        estimates = extract_targets(self.grid, image, self.scenario.extraction)
         truth = self.truth.pop(k)
-        parts = ospa_components(truth, estimates, self.scenario.ospa_c, self.scenario.ospa_p)
+        score = score_step(self.grid, image, truth, self.scenario.extraction,
+                           self.scenario.ospa_c, self.scenario.ospa_p)
+        estimates = score.estimates
         statuses = self.statuses.pop(k, {})
         # Every message sent is received by its addressee, so the team's mean received
         # per robot is its mean sent; the senders' counts are exact per step, while a
@@ -213,11 +213,7 @@ class MonitorNode(Node):
         msgs = (float(np.mean([s.messages_sent for s in statuses.values()]))
                 if statuses else 0.0)
         alive = self.alive.get(k, frozenset())
-        row = {"step": k, "t": k * self.dt, "ospa": float(parts.distance),
-               "ospa_localisation": float(parts.localisation),
-               "ospa_cardinality": float(parts.cardinality),
-               "cardinality_true": int(len(truth)), "cardinality_est": int(len(estimates)),
-               "expected_cardinality": float(expected_cardinality(image)),
+        row = {"step": k, "t": k * self.dt, **score.row(),
                "robots_alive": len(alive), "robots_reported": len(have),
                "messages_per_robot": msgs}
         self.series.append(row)
