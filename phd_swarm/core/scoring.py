@@ -74,3 +74,21 @@ def score_step(grid: Grid, image: np.ndarray, truth: np.ndarray,
                      ospa_cardinality=float(parts.cardinality),
                      cardinality_true=int(len(truth)), cardinality_est=int(len(estimates)),
                      expected_cardinality=float(expected_cardinality(image)))
+
+
+def series_summary(rows: list[dict]) -> dict[str, object]:
+    """Summary figures of a run's per-step rows (``t`` and the :meth:`StepScore.row` keys).
+
+    The final OSPA, the mean OSPA over the second half of the steps, the OSPA series as
+    ``[[t, ospa], ...]`` and the final true, estimated and expected cardinalities (None
+    when there are no rows), as DESIGN.md's ``summary.json`` names them.
+    """
+    ospa = [r["ospa"] for r in rows]
+    half = ospa[len(ospa) // 2:]
+    last = rows[-1] if rows else {}
+    return {"ospa_final": ospa[-1] if ospa else None,
+            "ospa_mean_last_half": float(np.mean(half)) if half else None,
+            "ospa_series": [[r["t"], r["ospa"]] for r in rows],
+            "cardinality_true_final": last.get("cardinality_true"),
+            "cardinality_est_final": last.get("cardinality_est"),
+            "expected_cardinality_final": last.get("expected_cardinality")}

@@ -32,7 +32,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
-from phd_swarm.core.scoring import score_step
+from phd_swarm.core.scoring import score_step, series_summary
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
@@ -266,9 +266,6 @@ class MonitorNode(Node):
     def summary(self) -> dict[str, Any]:
         """The run's summary (DESIGN.md "Outputs of a run") from the steps processed so far."""
         s = self.scenario
-        ospa = [r["ospa"] for r in self.series]
-        half = ospa[len(ospa) // 2:]
-        last = self.series[-1] if self.series else {}
         final_alive = self.alive.get(max(self.alive)) if self.alive else frozenset()
         dead = sorted((set(range(s.robots)) - set(final_alive or ())) | self.dead_reported)
         msgs = [r["messages_per_robot"] for r in self.series if r["robots_reported"]]
@@ -277,12 +274,7 @@ class MonitorNode(Node):
             "scenario": s.name, "seed": s.seed, "robots": s.robots,
             "steps": len(self.series), "sim_duration_s": len(self.series) * s.dt,
             "wall_duration_s": wall,
-            "ospa_final": ospa[-1] if ospa else None,
-            "ospa_mean_last_half": float(np.mean(half)) if half else None,
-            "ospa_series": [[r["t"], r["ospa"]] for r in self.series],
-            "cardinality_true_final": last.get("cardinality_true"),
-            "cardinality_est_final": last.get("cardinality_est"),
-            "expected_cardinality_final": last.get("expected_cardinality"),
+            **series_summary(self.series),
             "messages_per_robot_per_step": float(np.mean(msgs)) if msgs else 0.0,
             "dead_robots": dead,
             "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,

@@ -1,0 +1,323 @@
+"""A recorded run read back from its MCAP log: the inputs of evaluation and plots.
+
+:func:`load_run` reads, from a log written by the recorder (``run_swarm.sh`` or
+``record.sh CONFIG``), everything a step's picture and score need except the PHD itself:
+
+- the run's configuration (the ``phd_swarm.config`` metadata, or a config file);
+- per step: the true targets (``/world/truth``), the team state (``/world/robots``: robot
+  positions and who is alive), each robot's goal (``/robot_<i>/status``), cell
+  (``/robot_<i>/cell``) and scan (``/robot_<i>/measurements``: sensor position and
+  measurements), and the live monitor's metrics (``/monitor/metrics``) when recorded.
+
+The robots' PHD windows (``/robot_<i>/density``) are large (the whole map per step), so
+they are not kept: :meth:`RunLog.team_images` streams them and yields one team PHD image per
+step, assembled exactly as the live monitor assembles it (windows added in robot-id order).
+Messages are deserialised with rclpy's C type support (the installed message classes), not
+decoded in Python.
+
+A truncated log (recorder killed) is read up to its last complete chunk; steps whose data
+is incomplete are dropped from the end, with a warning.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections import defaultdict
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+from rclpy.serialization import deserialize_message
+
+from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
+from phd_swarm.core.cumulative import cumulative_weight
+from phd_swarm.nodes import convert
+from phd_swarm.nodes import topics as T
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.tools.mcap_log import LogError, open_log
+from phd_swarm_msgs.msg import (
+    CellPolygon,
+    DensityGrid,
+    MeasurementSet,
+    RobotStatus,
+    TargetSet,
+    TeamMetrics,
+    TeamState,
+)
+
+logger = logging.getLogger(__name__)
+
+_ROBOT_TOPIC = re.compile(r"^/" + T.ROBOT_PREFIX + r"(\d+)/(status|cell|measurements|density)$")
+
+
+@dataclass
+class StepRecord:
+    """What the log says about one step k (all positions in metres, world frame).
+
+    Attributes
+    ----------
+    step : int
+    truth : np.ndarray, shape (N, 2)
+        True target positions.
+    truth_ids : np.ndarray of int, shape (N,)
+    robots : dict of int to np.ndarray (2,)
+        Position of every robot in the team state of step k.
+    alive : frozenset of int
+        Robots alive at step k.
+    goals : dict of int to np.ndarray (2,)
+        Goal each robot reported at the end of step k.
+    cells : dict of int to np.ndarray (V, 2)
+        The latest cell polygon of each robot computed for step <= k.
+    scans : dict of int to (np.ndarray (2,), np.ndarray (M, 2))
+        Each robot's sensor position and measurement set of step k.
+    monitor : dict or None
+        The live monitor's metrics of step k (``ospa``, ``cardinality_estimated``, ...).
+    """
+
+    step: int
+    truth: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    truth_ids: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    robots: dict[int, np.ndarray] = field(default_factory=dict)
+    alive: frozenset[int] = frozenset()
+    goals: dict[int, np.ndarray] = field(default_factory=dict)
+    cells: dict[int, np.ndarray] = field(default_factory=dict)
+    scans: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    monitor: dict[str, float] | None = None
+
+
+@dataclass
+class RunLog:
+    """A run read from its log (see the module docstring).
+
+    Attributes
+    ----------
+    path : Path
+        The MCAP file.
+    config : RunConfig
+        The run's configuration.
+    steps : dict of int to StepRecord
+        The steps with truth and a team state, ascending.
+    truncated : bool
+        True if the log has no valid footer (writer killed).
+    """
+
+    path: Path
+    config: RunConfig
+    steps: dict[int, StepRecord]
+    truncated: bool
+
+    @property
+    def scenario(self) -> Scenario:
+        """The run's scenario."""
+        return self.config.scenario
+
+    @property
+    def controller(self) -> str:
+        """The robots' controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``)."""
+        return str(self.config.param("robot", "controller"))
+
+    def team_images(self, steps: Iterable[int] | None = None
+                    ) -> Iterator[tuple[int, np.ndarray, int]]:
+        """Yield ``(k, image, windows)`` per step: the team PHD (ny, nx) and how many windows.
+
+        A step is complete when the windows of every robot alive at k and k+1 have been
+        read (the monitor's rule); the rest are yielded at the end of the log. Windows are
+        added in robot-id order, as the monitor adds them, so the image is the monitor's
+        bit for bit.
+
+        Raises
+        ------
+        LogError
+            If a window does not fit the scenario's grid or holds bad numbers.
+        """
+        wanted = None if steps is None else set(steps)
+        grid = self.scenario.grid
+        pending: dict[int, dict[int, DensityGrid]] = defaultdict(dict)
+        done: set[int] = set()
+        topics = [T.robot_topic(r, "density") for r in range(self.scenario.robots)]
+
+        def assemble(k: int) -> tuple[int, np.ndarray, int]:
+            windows = pending.pop(k)
+            image = np.zeros(grid.shape)
+            for rid in sorted(windows):
+                try:
+                    convert.add_density(image, windows[rid], grid)
+                except convert.InvalidMessage as exc:
+                    raise LogError(f"{self.path}: density window of robot {rid} at step {k}: "
+                                   f"{exc}") from None
+            done.add(k)
+            return k, image, len(windows)
+
+        with open_log(self.path) as log:
+            for rec in log.messages(topics, decode=False):
+                msg = deserialize_message(rec.data, DensityGrid)
+                k = int(msg.step)
+                if k not in self.steps or k in done or (wanted is not None and k not in wanted):
+                    continue
+                pending[k][int(msg.owner_id)] = msg
+                if set(pending[k]) >= self.expected_windows(k):
+                    yield assemble(k)
+        for k in sorted(pending):
+            if pending[k]:
+                yield assemble(k)
+
+    def expected_windows(self, k: int) -> frozenset[int]:
+        """Robots whose windows make up step k: alive at k and at k+1 (the monitor's rule)."""
+        rec = self.steps[k]
+        later = self.steps.get(k + 1)
+        return rec.alive & later.alive if later is not None else rec.alive
+
+    def cumulative_images(self, steps: Iterable[int], mode: str | None = None
+                          ) -> dict[int, np.ndarray]:
+        """Chen's cumulative density wc (eq. 9-11) over the map after each of ``steps``.
+
+        Rebuilt from the scans in the log: every scan of step k adds one observation to
+        each bin of its field of view (Grid.disk_bins of the sensor position and detection
+        radius) and one reward if it holds a measurement; the counts are integers, so the
+        order of the scans does not matter and the team state is the union of the robots'.
+        ``mode`` defaults to the robots' ``cumulative_mode`` parameter.
+        """
+        grid = self.scenario.grid
+        radius = self.scenario.models.detection.radius
+        mode = mode or str(self.config.param("robot", "cumulative_mode"))
+        wanted = sorted(set(steps))
+        alpha = np.zeros(grid.size)
+        count = np.zeros(grid.size, dtype=np.int64)
+        out: dict[int, np.ndarray] = {}
+        for k in sorted(self.steps):
+            if not wanted or k > wanted[-1]:
+                break
+            for rid in sorted(self.steps[k].scans):
+                sensor, z = self.steps[k].scans[rid]
+                fov = grid.disk_bins(sensor, radius)
+                count[fov] += 1
+                if len(z):
+                    alpha[fov] += 1.0
+            if k in wanted:
+                out[k] = cumulative_weight(alpha, count, mode).reshape(grid.shape)
+        return out
+
+
+def _config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfig:
+    record = metadata.get("phd_swarm.config")
+    if not record or "params_yaml" not in record:
+        raise LogError(f"{path}: the log holds no run configuration (phd_swarm.config "
+                       "metadata; it was recorded without CONFIG); pass the run's config "
+                       "file with --config")
+    source = record.get("source") or "config"
+    try:
+        return run_config_from_dict(yaml.safe_load(record["params_yaml"]),
+                                    f"{path} (config recorded from {source})")
+    except (ValueError, yaml.YAMLError) as exc:
+        raise LogError(f"{path}: the recorded configuration is not valid: {exc}") from None
+
+
+def _xy(points, what: str, path: Path, k: int) -> np.ndarray:
+    try:
+        return convert.xy(points, what)
+    except convert.InvalidMessage as exc:
+        raise LogError(f"{path}: step {k}: {exc}") from None
+
+
+def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
+    """Read a run's log (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The MCAP log.
+    config : str or Path, optional
+        The run's config file, for logs recorded without one (it replaces the recorded
+        configuration if both exist).
+
+    Raises
+    ------
+    LogError
+        If the file is missing, not a ROS 2 MCAP log, holds no configuration, or holds no
+        complete step.
+    ValueError
+        If ``config`` is not a valid config file.
+    """
+    path = Path(path)
+    with open_log(path) as log:
+        metadata = log.metadata()
+        run_config = (load_run_config(config) if config is not None
+                      else _config_from_log(path, metadata))
+        n_robots = run_config.scenario.robots
+        steps: dict[int, StepRecord] = {}
+
+        def at(k: int) -> StepRecord:
+            return steps.setdefault(k, StepRecord(k))
+
+        cells: dict[int, list[tuple[int, np.ndarray]]] = defaultdict(list)
+        team_seen: set[int] = set()
+        truth_seen: set[int] = set()
+        topics = [T.WORLD_TRUTH, T.WORLD_ROBOTS, T.MONITOR_METRICS]
+        topics += [T.robot_topic(r, kind) for r in range(n_robots)
+                   for kind in ("status", "cell", "measurements")]
+        for rec in log.messages(topics, decode=False):
+            if rec.topic == T.WORLD_TRUTH:
+                m = deserialize_message(rec.data, TargetSet)
+                r = at(int(m.step))
+                r.truth = _xy(m.positions, "truth positions", path, m.step)
+                r.truth_ids = np.asarray(m.ids, dtype=np.int64)
+                truth_seen.add(int(m.step))
+            elif rec.topic == T.WORLD_ROBOTS:
+                m = deserialize_message(rec.data, TeamState)
+                r = at(int(m.step))
+                pos = _xy(m.positions, "robot positions", path, m.step)
+                r.robots = {int(i): pos[j] for j, i in enumerate(m.robot_ids)}
+                r.alive = frozenset(int(i) for i, a in zip(m.robot_ids, m.alive, strict=True)
+                                    if a)
+                team_seen.add(int(m.step))
+            elif rec.topic == T.MONITOR_METRICS:
+                m = deserialize_message(rec.data, TeamMetrics)
+                at(int(m.step)).monitor = {
+                    "ospa": m.ospa, "ospa_localisation": m.ospa_localisation,
+                    "ospa_cardinality": m.ospa_cardinality,
+                    "cardinality_true": m.cardinality_true,
+                    "cardinality_estimated": m.cardinality_estimated,
+                    "expected_cardinality": m.expected_cardinality}
+            else:
+                match = _ROBOT_TOPIC.match(rec.topic)
+                if match is None:
+                    continue
+                kind = match.group(2)
+                if kind == "status":
+                    m = deserialize_message(rec.data, RobotStatus)
+                    if m.state == RobotStatus.STATE_STEP_DONE and np.isfinite(m.goal.x) \
+                            and np.isfinite(m.goal.y):
+                        at(int(m.step)).goals[int(m.robot_id)] = np.array([m.goal.x, m.goal.y])
+                elif kind == "cell":
+                    m = deserialize_message(rec.data, CellPolygon)
+                    cells[int(m.robot_id)].append(
+                        (int(m.step), _xy(m.vertices, "cell vertices", path, m.step)))
+                else:
+                    m = deserialize_message(rec.data, MeasurementSet)
+                    sensor = np.array([m.sensor_position.x, m.sensor_position.y])
+                    at(int(m.step)).scans[int(m.robot_id)] = (
+                        sensor, _xy(m.measurements, "measurements", path, m.step))
+        truncated = log.truncated
+
+    # Keep the steps the world announced (truth and team state); the final team state
+    # (step = steps, after the last move) has no truth and is not a step of its own.
+    complete = {k: steps[k] for k in sorted(steps) if k in team_seen and k in truth_seen}
+    if not complete:
+        raise LogError(f"{path}: no complete step in the log (no /world/truth with its "
+                       "/world/robots)")
+    for rid, seq in cells.items():
+        seq.sort(key=lambda s: s[0])
+        i, latest = 0, None
+        for k in complete:
+            while i < len(seq) and seq[i][0] <= k:
+                latest = seq[i][1]
+                i += 1
+            if latest is not None:
+                complete[k].cells[rid] = latest
+    if truncated:
+        logger.warning("%s: truncated log: %d complete steps read", path, len(complete))
+    return RunLog(path, run_config, complete, truncated)
+

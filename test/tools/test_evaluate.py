@@ -1,0 +1,167 @@
+"""scripts/evaluate.sh: OSPA and cardinality from the log alone, pictures, bad logs."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phd_swarm.tools.mcap_log import LogWriter, open_log
+from phd_swarm.tools.run_log import load_run
+
+ROOT = Path(__file__).resolve().parents[2]
+EVALUATE = str(ROOT / "scripts" / "evaluate.sh")
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+
+def _evaluate(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([EVALUATE, *args], capture_output=True, text=True, timeout=180)
+
+
+def _copy_log(src: Path, dst: Path, chunk_size: int = 1 << 20, metadata: bool = True) -> Path:
+    """Rewrite ``src`` into ``dst`` (smaller chunks, or without the config metadata)."""
+    with open_log(src) as log:
+        meta = log.metadata()
+        with LogWriter(dst, chunk_size=chunk_size) as out:
+            if metadata:  # first, as the recorder writes it
+                for name, data in meta.items():
+                    out.add_metadata(name, data)
+            for rec in log.messages(decode=False):
+                out.add_channel(rec.topic, rec.ros_type)
+                out.write(rec.topic, rec.data, rec.log_time_ns, rec.publish_time_ns)
+    return dst
+
+
+def _is_png(path: Path) -> bool:
+    return path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_evaluation_reproduces_the_monitor_and_draws_the_run(recorded_run, tmp_path):
+    out = tmp_path / "eval"
+    res = _evaluate(str(recorded_run / "run.mcap"), "--out", str(out), "--snapshot", "3",
+                    "--snapshot", "11.5", "--animate", str(tmp_path / "run.gif"),
+                    "--every", "8")
+    assert res.returncode == 0, res.stderr
+    assert "largest OSPA difference 0 m" in res.stdout
+
+    monitor = json.loads((recorded_run / "summary.json").read_text())
+    ev = json.loads((out / "evaluation.json").read_text())
+    assert ev["steps"] == monitor["steps"] == 24
+    # Same windows, same arithmetic: the series are equal, not merely close.
+    assert ev["ospa_series"] == monitor["ospa_series"]
+    for key in ("ospa_final", "ospa_mean_last_half", "cardinality_true_final",
+                "cardinality_est_final", "expected_cardinality_final"):
+        assert ev[key] == monitor[key], key
+    assert ev["monitor_agreement"] == {"steps_compared": 24, "max_abs_ospa_difference": 0.0,
+                                       "steps_only_in_evaluation": 0}
+    assert ev["truncated"] is False and ev["controller"] == "phd"
+
+    with open(out / "series.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["step"]) for r in rows] == list(range(24))
+    assert all(int(r["windows"]) == 4 for r in rows)
+    assert [float(r["ospa"]) for r in rows] == [o for _, o in monitor["ospa_series"]]
+
+    for name in ("ospa.png", "snapshot_3s.png", "snapshot_11.5s.png"):
+        assert _is_png(out / name), name
+    assert (tmp_path / "run.gif").read_bytes()[:6] == b"GIF89a"
+
+
+def test_a_truncated_log_is_evaluated_up_to_its_last_complete_step(recorded_run, tmp_path):
+    small = _copy_log(recorded_run / "run.mcap", tmp_path / "small.mcap", chunk_size=16_384)
+    data = small.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.6)])
+
+    res = _evaluate(str(cut), "--out", str(tmp_path / "eval"), "--no-plots")
+    assert res.returncode == 0, res.stderr
+    assert "truncated" in res.stderr
+    ev = json.loads((tmp_path / "eval" / "evaluation.json").read_text())
+    monitor = json.loads((recorded_run / "summary.json").read_text())
+    assert ev["truncated"] is True
+    assert 0 < ev["steps"] < 24
+    assert ev["ospa_series"] == monitor["ospa_series"][: ev["steps"]]
+
+
+def test_bad_files_give_clear_errors(recorded_run, tmp_path):
+    text = tmp_path / "notes.txt"
+    text.write_text("not a log\n")
+    res = _evaluate(str(text))
+    assert res.returncode == 1
+    assert f"{text}: not an MCAP file" in res.stderr
+
+    res = _evaluate(str(tmp_path / "missing.mcap"))
+    assert res.returncode == 1 and "no such file" in res.stderr
+
+    bare = _copy_log(recorded_run / "run.mcap", tmp_path / "bare.mcap", metadata=False)
+    res = _evaluate(str(bare), "--no-plots")
+    assert res.returncode == 1
+    assert "holds no run configuration" in res.stderr and "--config" in res.stderr
+    # ... and with the run's config file it works.
+    res = _evaluate(str(bare), "--config", str(recorded_run / "config.yaml"), "--no-plots",
+                    "--out", str(tmp_path / "eval"))
+    assert res.returncode == 0, res.stderr
+
+    res = _evaluate(str(recorded_run / "run.mcap"), "--out", str(tmp_path / "e2"),
+                    "--animate", str(tmp_path / "run.avi"))
+    assert res.returncode == 1 and ".gif or .mp4" in res.stderr
+    res = _evaluate(str(recorded_run / "run.mcap"), "--snapshot", "99", "--no-plots",
+                    "--out", str(tmp_path / "e3"))
+    assert res.returncode == 0  # no plots asked for: --snapshot is not used
+    res = _evaluate(str(recorded_run / "run.mcap"), "--snapshot", "99",
+                    "--out", str(tmp_path / "e3"))
+    assert res.returncode == 1 and "outside the log" in res.stderr
+
+
+@pytest.fixture(scope="module")
+def chen_run(tmp_path_factory) -> Path:
+    """A short recorded run of Chen's O method (4 robots, 1 m grid, 12 steps)."""
+    from phd_swarm.testing import ChildProcesses
+
+    out = tmp_path_factory.mktemp("chen")
+    argv = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / "chen_clustered.yaml"),
+            "--robots", "4", "--duration", "6", "--seed", "2", "--controller", "chen_o",
+            "--out", str(out), "--name", "run", "--quiet"]
+    with ChildProcesses() as children:
+        proc = children.start(argv)
+        try:
+            stdout, stderr = proc.communicate(timeout=240)
+        except subprocess.TimeoutExpired:
+            children.stop(proc)
+            raise
+    assert proc.returncode == 0, f"run_swarm failed:\n{stdout}\n{stderr}"
+    return out / "run"
+
+
+def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp_path):
+    from phd_swarm.core.cumulative import cumulative_weight
+    from phd_swarm.sim.engine import InMemoryEngine
+
+    run = load_run(chen_run / "run.mcap")
+    assert run.controller == "chen_o" and len(run.steps) == 12
+    rebuilt = run.cumulative_images([5, 11])
+
+    # The in-memory engine computes what the ROS robots computed (proven bit for bit in
+    # test_team_inprocess); its robots' own cumulative state is the reference.
+    engine = InMemoryEngine(run.scenario, "chen_o")
+    grid = run.scenario.grid
+    for k in range(12):
+        engine.step()
+        if k in rebuilt:
+            alpha = np.zeros(grid.size)
+            count = np.zeros(grid.size, dtype=np.int64)
+            for robot in engine.robots.values():
+                alpha[robot.bins] = robot.alpha
+                count[robot.bins] = robot.count
+            expected = cumulative_weight(alpha, count, "rate").reshape(grid.shape)
+            np.testing.assert_array_equal(rebuilt[k], expected)
+            assert expected.max() > 0
+
+    res = _evaluate(str(chen_run / "run.mcap"), "--out", str(tmp_path / "eval"))
+    assert res.returncode == 0, res.stderr
+    assert _is_png(tmp_path / "eval" / "snapshot_5.5s.png")
