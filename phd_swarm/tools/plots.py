@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection, PatchCollection  # noqa: E402
+from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
 #: Colours of the series and markers (colour-blind safe, Okabe-Ito).
@@ -119,12 +120,15 @@ def draw_snapshot(f: Frame, fig: Any | None = None) -> Any:
     fig.clear()
     axes = fig.subplots(1, panels, squeeze=False)[0]
     xmin, ymin, xmax, ymax = f.extent
-    images = [(f.phd, "PHD [targets / bin]", "viridis")]
+    # The PHD concentrates in a few bins at the targets: a square-root colour scale keeps the
+    # weak mass of unexplored areas visible next to the peaks.
+    images = [(f.phd, "PHD [targets / bin] (square-root scale)", "viridis",
+               PowerNorm(0.5, vmin=0.0, vmax=max(float(f.phd.max()), 1e-12)))]
     if f.cumulative is not None:
-        images.append((f.cumulative, "cumulative density $w_c$", "magma"))
-    for i, (ax, (img, label, cmap)) in enumerate(zip(axes, images, strict=True)):
+        images.append((f.cumulative, "cumulative density $w_c$", "magma", None))
+    for i, (ax, (img, label, cmap, norm)) in enumerate(zip(axes, images, strict=True)):
         im = ax.imshow(img, origin="lower", extent=(xmin, xmax, ymin, ymax), cmap=cmap,
-                       interpolation="nearest", zorder=1)
+                       norm=norm, interpolation="nearest", zorder=1)
         fig.colorbar(im, ax=ax, shrink=0.82, label=label)
         _draw_team(ax, f, legend=(i == 0))
     fig.suptitle(f.title or f"t = {f.t:.1f} s (step {f.step})", fontsize=10)
