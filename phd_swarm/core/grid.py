@@ -191,6 +191,53 @@ class Grid:
         iyy, ixx = np.nonzero(inside)
         return (iy[iyy] * self.nx + ix[ixx]).astype(np.int64)
 
+    def disks_meet(self, flat: np.ndarray, centres: np.ndarray, radius: float) -> np.ndarray:
+        """Whether each disk's :meth:`disk_bins` shares a bin with ``flat``, without listing it.
+
+        ``disks_meet(flat, c, r)[i] == np.isin(disk_bins(c[i], r), flat).any()`` exactly:
+        the disk's bounding box and the distance test are the same float expressions as in
+        :meth:`disk_bins`, evaluated for every (bin, disk) pair of ``flat`` and the disks
+        whose boxes meet the box of ``flat``. The cost is O(K x C) for K bins and C such
+        disks, in blocks of about 2**16 pairs.
+
+        Parameters
+        ----------
+        flat : np.ndarray of int, shape (K,)
+            Flat indices of the bins (any order).
+        centres : np.ndarray, shape (C, 2)
+            Disk centres [m].
+        radius : float
+            Disk radius [m].
+
+        Returns
+        -------
+        np.ndarray of bool, shape (C,)
+        """
+        flat = np.asarray(flat, dtype=np.int64).reshape(-1)
+        c = np.asarray(centres, dtype=float).reshape(-1, 2)
+        meet = np.zeros(c.shape[0], dtype=bool)
+        if flat.size == 0 or c.shape[0] == 0:
+            return meet
+        res = self.resolution
+        cx, cy = c[:, 0], c[:, 1]
+        ix0 = np.maximum(np.floor((cx - radius - self.env.xmin) / res - 0.5), 0)
+        ix1 = np.minimum(np.ceil((cx + radius - self.env.xmin) / res - 0.5), self.nx - 1)
+        iy0 = np.maximum(np.floor((cy - radius - self.env.ymin) / res - 0.5), 0)
+        iy1 = np.minimum(np.ceil((cy + radius - self.env.ymin) / res - 0.5), self.ny - 1)
+        iy, ix = self.unravel(flat)
+        cand = np.flatnonzero((ix0 <= ix.max()) & (ix1 >= ix.min()) & (iy0 <= iy.max())
+                              & (iy1 >= iy.min()) & (ix0 <= ix1) & (iy0 <= iy1))
+        x, y = self.xs[ix][:, None], self.ys[iy][:, None]
+        r2 = radius * radius
+        block = max(1, (1 << 16) // flat.size)
+        for start in range(0, cand.size, block):
+            k = cand[start:start + block]
+            inside = ((ix[:, None] >= ix0[k]) & (ix[:, None] <= ix1[k])
+                      & (iy[:, None] >= iy0[k]) & (iy[:, None] <= iy1[k]))
+            inside &= (y - cy[k]) ** 2 + (x - cx[k]) ** 2 <= r2
+            meet[k] = inside.any(axis=0)
+        return meet
+
     def image(self, flat: np.ndarray, values: np.ndarray, fill: float = 0.0) -> np.ndarray:
         """Scatter per-bin ``values`` at ``flat`` indices into a full ``(ny, nx)`` image."""
         img = np.full(self.size, fill, dtype=float)

@@ -34,6 +34,9 @@ from .grid import Environment, Grid
 #: stay in cache, which measured faster than larger blocks.
 _BLOCK_ELEMENTS = 1 << 16
 
+#: (bin, generator) pairs up to which :func:`bins_owned_in_box` evaluates every pair.
+_DIRECT_PAIRS = 1 << 14
+
 #: Vertices closer than this fraction of (width + height) are merged after a clip.
 _MERGE_REL = 1e-12
 
@@ -139,6 +142,91 @@ def bin_owners(grid: Grid, positions: np.ndarray,
     return assign_bins(grid.centres, positions, power_weights)
 
 
+def bins_owned_in_box(grid: Grid, index: int, positions: np.ndarray,
+                      power_weights: np.ndarray | None,
+                      box: tuple[int, int, int, int]) -> np.ndarray:
+    """Bins of a box of the grid that :func:`assign_bins` gives to generator ``index``.
+
+    Equal to ``flat[assign_bins(grid.centres_of(flat), positions, power_weights) ==
+    index]`` for the ascending flat indices ``flat`` of the box (which is how boxes of up
+    to :data:`_DIRECT_PAIRS` (bin, generator) pairs are done), but without evaluating
+    every pair. The box is cut into about 8 x 8 tiles; for each tile and generator k,
+    bounds ``L_k <= d_k(x) <= U_k`` of the power distance over the tile's bin centres
+    follow from their nearest and farthest coordinates. A generator with
+    ``L_k > min_j U_j + margin`` is beaten at every bin of the tile, so the owners there
+    are those of the remaining *contenders*: a tile where ``index`` is the only contender
+    is all its own, one where it is none is none of its own, and only the bins of the
+    other tiles are assigned, by :func:`assign_bins` with the contenders of those tiles as
+    ``candidates`` (whose values per (point, generator) pair do not depend on the other
+    generators). The margin, 1e-9 of the largest squared distance plus rho^2 in the tile,
+    exceeds the rounding error of the power distances and of the bounds (a few 1e-16 of
+    that) by about 10^5, so pruning never changes a winner, ties included.
+
+    Parameters
+    ----------
+    grid : Grid
+    index : int
+        Row of ``positions`` whose bins are wanted.
+    positions : np.ndarray, shape (R, 2)
+        Generators q [m], rows ordered by robot id.
+    power_weights : np.ndarray, shape (R,), optional
+        rho [m]; None for Voronoi.
+    box : tuple of int
+        ``(iy0, iy1, ix0, ix1)``, inclusive bin-index ranges.
+
+    Returns
+    -------
+    np.ndarray of int64
+        Ascending flat indices of the bins of the box owned by ``index``.
+    """
+    q, rho2 = _check_generators(positions, power_weights)
+    iy0, iy1, ix0, ix1 = (int(v) for v in box)
+    if iy1 < iy0 or ix1 < ix0:
+        return np.empty(0, dtype=np.int64)
+    xs, ys = grid.xs[ix0:ix1 + 1], grid.ys[iy0:iy1 + 1]
+    if xs.size * ys.size * q.shape[0] <= _DIRECT_PAIRS:
+        iy, ix = np.meshgrid(np.arange(iy0, iy1 + 1), np.arange(ix0, ix1 + 1), indexing="ij")
+        flat = (iy * grid.nx + ix).ravel()
+        return flat[assign_bins(grid.centres_of(flat), q, power_weights) == index]
+    # About 8 x 8 tiles, of 4 to 32 bins a side.
+    tile = int(np.clip(round(np.sqrt(xs.size * ys.size) / 8), 4, 32))
+    col_tile = np.arange(xs.size) // tile
+    row_tile = np.arange(ys.size) // tile
+    first_x = np.arange(0, xs.size, tile)
+    first_y = np.arange(0, ys.size, tile)
+    near_x, far_x = _axis_bounds(xs[first_x], xs[np.minimum(first_x + tile, xs.size) - 1],
+                                 q[:, 0])
+    near_y, far_y = _axis_bounds(ys[first_y], ys[np.minimum(first_y + tile, ys.size) - 1],
+                                 q[:, 1])
+    # (tile rows, tile columns, generators)
+    lower = near_y[:, None, :] ** 2 + near_x[None, :, :] ** 2 - rho2
+    far2 = far_y[:, None, :] ** 2 + far_x[None, :, :] ** 2
+    upper = far2 - rho2
+    margin = 1e-9 * (far2 + rho2).max(axis=2, keepdims=True)
+    contender = lower <= upper.min(axis=2, keepdims=True) + margin
+    alone = contender[..., index] & (contender.sum(axis=2) == 1)
+    shared = contender[..., index] & ~alone
+    owned = alone[row_tile[:, None], col_tile[None, :]]
+    if shared.any():
+        rows, cols = np.nonzero(shared[row_tile[:, None], col_tile[None, :]])
+        flat = (iy0 + rows) * grid.nx + (ix0 + cols)
+        candidates = np.flatnonzero(contender[shared].any(axis=0))
+        mine = assign_bins(grid.centres_of(flat), q, power_weights,
+                           candidates=candidates) == index
+        owned[rows[mine], cols[mine]] = True
+    rows, cols = np.nonzero(owned)
+    return ((iy0 + rows) * grid.nx + (ix0 + cols)).astype(np.int64)
+
+
+def _axis_bounds(lo: np.ndarray, hi: np.ndarray,
+                 q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest and farthest |x - q| over the intervals [lo, hi] (T,) for each q (R,): (T, R)."""
+    below, above = lo[:, None] - q[None, :], q[None, :] - hi[:, None]
+    near = np.maximum(np.maximum(below, above), 0.0)
+    far = np.maximum(np.abs(below), np.abs(above))
+    return near, far
+
+
 def polygon_area(poly: np.ndarray) -> float:
     """Area of a simple polygon by the shoelace formula [m^2], >= 0; (V, 2) -> float.
 
@@ -211,6 +299,107 @@ def points_in_polygon(points: np.ndarray, poly: np.ndarray, tol: float = 0.0) ->
         inward = (edge[0] * (p[:, 1] - a[1]) - edge[1] * (p[:, 0] - a[0])) / length
         inside &= inward >= -tol
     return inside
+
+
+def points_in_polygons(points: np.ndarray, polys: list[np.ndarray],
+                       tol: float = 0.0) -> np.ndarray:
+    """:func:`points_in_polygon` of every point in every polygon, in one array operation.
+
+    ``points_in_polygons(p, polys, tol)[:, i] == points_in_polygon(p, polys[i], tol)``
+    exactly: the edges of all polygons are stacked and the same float expressions are
+    evaluated for every (point, edge) pair, so the cost is O(N x total vertices).
+
+    Parameters
+    ----------
+    points : np.ndarray, shape (N, 2)
+        Query points [m].
+    polys : list of np.ndarray, each shape (V_i, 2)
+        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
+    tol : float
+        Margin [m], as in :func:`points_in_polygon`.
+
+    Returns
+    -------
+    np.ndarray of bool, shape (N, len(polys))
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
+    inside = np.zeros((p.shape[0], len(polys)), dtype=bool)
+    real = [i for i, v in enumerate(polys) if v.shape[0] >= 3]
+    if real and p.shape[0]:
+        a, starts, nxt = stack_polygons([polys[i] for i in real])
+        edge = a[nxt] - a
+        length = np.hypot(edge[:, 0], edge[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inward = (edge[:, 0] * (p[:, 1:2] - a[:, 1]) - edge[:, 1] * (p[:, 0:1] - a[:, 0])) \
+                / length
+        # Zero-length edges are skipped, as in points_in_polygon.
+        ok = (inward >= -tol) | (length == 0.0)
+        inside[:, real] = np.logical_and.reduceat(ok, starts, axis=1)
+    return inside
+
+
+def points_in_any_polygon(points: np.ndarray, polys: list[np.ndarray],
+                          tol: float = 0.0) -> np.ndarray:
+    """Whether each point lies in at least one of ``polys`` (each grown by ``tol``).
+
+    :func:`points_in_polygons` or-ed over the polygons, taken in groups of about 2**16
+    (point, vertex) pairs; the points already inside a polygon are not tested against the
+    later groups.
+
+    Parameters
+    ----------
+    points : np.ndarray, shape (N, 2)
+        Query points [m].
+    polys : list of np.ndarray, each shape (V_i, 2)
+        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
+    tol : float
+        Margin [m], as in :func:`points_in_polygon`.
+
+    Returns
+    -------
+    np.ndarray of bool, shape (N,)
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    inside = np.zeros(p.shape[0], dtype=bool)
+    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
+    first = 0
+    while first < len(polys) and not inside.all():
+        rest = np.flatnonzero(~inside)
+        n_vertices, last = 0, first
+        while last < len(polys) and (last == first or
+                                     rest.size * (n_vertices + len(polys[last])) <= 1 << 16):
+            n_vertices += len(polys[last])
+            last += 1
+        inside[rest] = points_in_polygons(p[rest], polys[first:last], tol).any(axis=1)
+        first = last
+    return inside
+
+
+def stack_polygons(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All vertices of several polygons in one array, for edge-wise array operations.
+
+    Parameters
+    ----------
+    polys : list of np.ndarray, each shape (V_i, 2), V_i >= 1
+
+    Returns
+    -------
+    vertices : np.ndarray, shape (V, 2)
+        The polygons' vertices one after the other, V = sum V_i.
+    starts : np.ndarray of int64, shape (len(polys),)
+        Row of each polygon's first vertex (for ``ufunc.reduceat``).
+    following : np.ndarray of int64, shape (V,)
+        Row of the next vertex of the same polygon (its first after its last), so that
+        ``vertices[following] - vertices`` are the edges, as ``np.roll(poly, -1, axis=0)
+        - poly`` per polygon.
+    """
+    sizes = np.array([len(v) for v in polys], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(sizes[:-1])]).astype(np.int64)
+    vertices = np.concatenate(polys).reshape(-1, 2)
+    following = np.arange(1, vertices.shape[0] + 1)
+    following[starts + sizes - 1] = starts
+    return vertices, starts, following
 
 
 def _clip(poly: np.ndarray, f: np.ndarray, merge_tol: float) -> np.ndarray:

@@ -70,6 +70,16 @@ def psi(models: PhdModels, centres: np.ndarray, z: np.ndarray,
     return _psi_pd(models, centres, z, sensor)[0]
 
 
+def psi_pd(models: PhdModels, centres: np.ndarray, z: np.ndarray,
+           sensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`psi` (M, K) and the p_d (K,) it is built on, computing p_d once (eq. 6).
+
+    The parameters are those of :func:`psi`; ``psi_pd(...)[0] == psi(...)`` exactly and
+    ``psi_pd(...)[1] == models.detection.probability(centres, sensor)``.
+    """
+    return _psi_pd(models, centres, z, sensor)
+
+
 def eta_partial(psi_zx: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Partial normaliser sum_j psi_z(x_j) w_j over the given bins (Dames eq. 5, Alg. 2 l. 13).
 

@@ -39,13 +39,17 @@ class DeadlockError(RuntimeError):
     """No robot can make progress and no timeout can help: a protocol bug."""
 
 
+#: ``msg_defs`` names of the protocol messages other than transfers, by class name.
+_TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "ScanMsg": "MeasurementSet",
+               "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}
+
+
 def message_type(env: Envelope) -> str:
     """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart)."""
     msg = env.msg
     if isinstance(msg, TransferMsg):
         return "ParticleTransfer" if msg.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
-    return {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "ScanMsg": "MeasurementSet",
-            "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}[type(msg).__name__]
+    return _TYPE_NAMES[type(msg).__name__]
 
 
 @dataclass
@@ -153,37 +157,46 @@ class InMemoryEngine:
     def _deliver(self, initial: list[Envelope], traffic: StepTraffic) -> None:
         fifo: deque[Envelope] = deque(initial)
         pool: list[Envelope] = []
-        if self._rng is not None:
+        shuffle = self._rng is not None
+        if shuffle:
             pool, fifo = list(fifo), deque()
+        queue = pool if shuffle else fifo
+        robots, killed = self.robots, self.killed
+        messages, sizes = traffic.messages, traffic.bytes
+        last, kind, size = None, "", 0
         stalls = 0
         limit = 4 * self.ctx.timeout_ticks + 8
         while True:
             while fifo or pool:
-                if self._rng is None:
-                    env = fifo.popleft()
-                else:
+                if shuffle:
                     i = int(self._rng.integers(len(pool)))
                     pool[i], pool[-1] = pool[-1], pool[i]
                     env = pool.pop()
-                if env.dst in self.killed or env.src in self.killed:
+                else:
+                    env = fifo.popleft()
+                dst = env.dst
+                if dst in killed or env.src in killed:
                     traffic.lost += 1
                     continue
-                kind = message_type(env)
-                traffic.messages[env.dst][kind] += 1
-                traffic.bytes[env.dst][kind] += env.msg.wire_size()
-                robot = self.robots[env.dst]
-                robot.receive(env.msg)
-                (fifo if self._rng is None else pool).extend(robot.advance())
-            waiting = [rid for rid in self.live_ids() if not self.robots[rid].done]
+                msg = env.msg
+                # A broadcast is queued as consecutive envelopes of one message object.
+                if msg is not last:
+                    last, kind, size = msg, message_type(env), msg.wire_size()
+                messages[dst][kind] += 1
+                sizes[dst][kind] += size
+                robot = robots[dst]
+                robot.receive(msg)
+                queue.extend(robot.advance())
+            waiting = [rid for rid in self.live_ids() if not robots[rid].done]
             if not waiting:
                 return
             stalls += 1
             if stalls > limit:
-                phases = {rid: self.robots[rid].phase.value for rid in waiting}
+                phases = {rid: robots[rid].phase.value for rid in waiting}
                 raise DeadlockError(f"step {self.world.step_index}: robots still waiting after "
                                     f"{limit} rounds without progress: {phases}")
             for rid in waiting:
-                (fifo if self._rng is None else pool).extend(self.robots[rid].tick())
+                queue.extend(robots[rid].tick())
 
     # -------------------------------------------------------------- observation
     def team_weights(self) -> np.ndarray:

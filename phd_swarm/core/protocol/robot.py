@@ -57,11 +57,20 @@ from functools import cached_property
 
 import numpy as np
 
-from ..cumulative import cumulative_update
+from ..cumulative import cumulative_update_counts
 from ..grid import Grid
 from ..models import PhdModels
-from ..partition import assign_bins, cell_of, partition, points_in_polygon
-from ..phd_grid import eta_partial, eta_total, fov_positions, psi, spread, update_weights
+from ..partition import (
+    assign_bins,
+    bins_owned_in_box,
+    cell_of,
+    partition,
+    points_in_any_polygon,
+    points_in_polygon,
+    points_in_polygons,
+    stack_polygons,
+)
+from ..phd_grid import eta_partial, eta_total, psi_pd, spread, update_weights
 from .messages import (
     CellMsg,
     Envelope,
@@ -76,6 +85,10 @@ from .messages import (
 )
 
 _log = logging.getLogger("phd_swarm.protocol")
+
+#: Field-of-view disks kept by :meth:`FilterContext.fov_bins`: one per robot of a step,
+#: with room for the largest teams (at 0.1 m bins a disk of 5 m is ~60 kB).
+_FOV_CACHE_SIZE = 256
 
 
 class ProtocolError(RuntimeError):
@@ -97,6 +110,10 @@ class Phase(enum.Enum):
 @dataclass(frozen=True, eq=False)
 class FilterContext:
     """What every robot of a team shares: the grid, the models and derived per-bin arrays.
+
+    Robots in one process (the in-memory engine) may share one context, and then also its
+    cache of field-of-view disks (:meth:`fov_bins`); a robot with a context of its own
+    computes the same values.
 
     Attributes
     ----------
@@ -163,10 +180,82 @@ class FilterContext:
         bin hand-overs between cells within the kernel's reach, with the margin for the
         next move of both robots and the change of the cell radii.
         """
-        d = float(np.hypot(q_a[0] - q_b[0], q_a[1] - q_b[1]))
-        bound = (2.0 * max(radius_a, radius_b) + rho_a + rho_b
+        q_b = np.asarray(q_b, dtype=float).reshape(1, 2)
+        return bool(self.contact_mask(q_a, rho_a, radius_a, q_b, np.array([rho_b], float),
+                                      np.array([radius_b], float))[0])
+
+    def contact_mask(self, q_a: np.ndarray, rho_a: float, radius_a: float,
+                     q_b: np.ndarray, rho_b: np.ndarray, radius_b: np.ndarray) -> np.ndarray:
+        """:meth:`are_contacts` of robot a with each of N robots b at once.
+
+        The same float expression as the pairwise rule, element by element (hypot, then
+        the bound summed left to right), so both sides of a pair still agree bit for bit.
+
+        Parameters
+        ----------
+        q_a : np.ndarray, shape (2,)
+            Position of robot a [m].
+        rho_a, radius_a : float
+            Its power weight and cell radius [m].
+        q_b : np.ndarray, shape (N, 2)
+            Positions of the robots b [m].
+        rho_b, radius_b : np.ndarray, shape (N,)
+            Their power weights and cell radii [m].
+
+        Returns
+        -------
+        np.ndarray of bool, shape (N,)
+        """
+        q_a = np.asarray(q_a, dtype=float)
+        q_b = np.asarray(q_b, dtype=float).reshape(-1, 2)
+        d = np.hypot(q_a[0] - q_b[:, 0], q_a[1] - q_b[:, 1])
+        bound = (2.0 * np.maximum(radius_a, np.asarray(radius_b, dtype=float)) + rho_a
+                 + np.asarray(rho_b, dtype=float)
                  + max(self.models.detection.radius, self.reach) + 2.0 * self.contact_margin)
         return d <= bound
+
+    def fov_bins(self, sensor: np.ndarray) -> np.ndarray:
+        """``grid.disk_bins(sensor, detection radius)``, cached by the exact position.
+
+        In one step every robot whose bins meet a field of view needs that disk; robots
+        sharing this context (one process) compute each disk once. The key is the position's
+        bytes, so a hit returns exactly what :meth:`Grid.disk_bins` would; the arrays are
+        read-only. The cache keeps the :data:`_FOV_CACHE_SIZE` most recent disks.
+        """
+        sensor = np.asarray(sensor, dtype=float).reshape(2)
+        key = sensor.tobytes()
+        cache = self._fov_cache
+        disk = cache.get(key)
+        if disk is None:
+            disk = self.grid.disk_bins(sensor, self.models.detection.radius)
+            disk.setflags(write=False)
+            if len(cache) >= _FOV_CACHE_SIZE:
+                cache.pop(next(iter(cache), None), None)
+            cache[key] = disk
+        return disk
+
+    @cached_property
+    def _fov_cache(self) -> dict[bytes, np.ndarray]:
+        return {}
+
+
+@dataclass(frozen=True)
+class _Known:
+    """States of the contacts and the contacts' contacts at one step, by ascending id.
+
+    Attributes
+    ----------
+    ids : np.ndarray of int64, shape (N,)
+    positions : np.ndarray, shape (N, 2)
+        Positions q [m].
+    power_weights, cell_radii : np.ndarray, shape (N,)
+        rho [m] and cell radii [m].
+    """
+
+    ids: np.ndarray
+    positions: np.ndarray
+    power_weights: np.ndarray
+    cell_radii: np.ndarray
 
 
 @dataclass
@@ -184,7 +273,10 @@ class _StepData:
     cell: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
     neighbours: tuple[int, ...] = ()
     cells: dict[int, tuple[np.ndarray, tuple[int, ...]]] = field(default_factory=dict)
-    known: dict[int, tuple[np.ndarray, float, float]] | None = None
+    cell_ids: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    cell_lo: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    cell_hi: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    known: _Known | None = None
     owned: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
     transfer_peers: set[int] = field(default_factory=set)
     phantom_peers: set[int] = field(default_factory=set)
@@ -192,6 +284,9 @@ class _StepData:
     scan_peers: set[int] = field(default_factory=set)
     pending: list[int] = field(default_factory=list)
     partial_sent: set[int] = field(default_factory=set)
+    fov_terms: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None
+    observed: np.ndarray | None = None
+    rewarded: np.ndarray | None = None
 
 
 class RobotFilter:
@@ -263,10 +358,9 @@ class RobotFilter:
         two_hop = set(self.neighbours)
         for j in part.neighbours[me]:
             two_hop.update(int(ids[k]) for k in part.neighbours[j])
-        for j, rid in enumerate(ids):
-            if self.ctx.are_contacts(positions[me], rho_all[me], radii[me], positions[j],
-                                     rho_all[j], radii[j]):
-                two_hop.add(int(rid))
+        near = self.ctx.contact_mask(positions[me], rho_all[me], radii[me], positions,
+                                     rho_all, radii)
+        two_hop.update(ids[near].tolist())
         two_hop.discard(self.robot_id)
         self.contacts = tuple(sorted(two_hop))
         self.bins = self._owned_bins(self.cell, ids, positions,
@@ -328,6 +422,9 @@ class RobotFilter:
 
     def advance(self) -> list[Envelope]:
         """Make as much progress as the buffered messages allow; returns what to send."""
+        # Most messages complete nothing: leave at once while a wait is still short.
+        if self._cur is None or self._waiting():
+            return []
         out: list[Envelope] = []
         while self._cur is not None:
             before = (self.phase, len(self._cur.pending), len(self._cur.partial_sent))
@@ -359,26 +456,50 @@ class RobotFilter:
         cur = self._cur
         assert cur is not None
         if self.phase == Phase.STATES:
-            if self._missing():
+            if self._waiting():
                 return []
             return self._compute_cell()
         if self.phase == Phase.CELLS:
-            if self._missing():
+            if self._waiting():
                 return []
             return self._hand_over_bins()
         if self.phase == Phase.TRANSFERS:
-            if self._missing():
+            if self._waiting():
                 return []
             self._take_over_bins()
             return self._predict()
         if self.phase == Phase.PHANTOMS:
-            if self._missing():
+            if self._waiting():
                 return []
             self._add_phantoms()
             return self._start_update()
         if self.phase == Phase.UPDATE:
             return self._update_next()
         return []
+
+    def _waiting(self) -> bool:
+        """Whether a STATES to PHANTOMS wait still needs a message (False in other phases).
+
+        ``bool(self._missing())``, but O(1) while fewer messages than peers have arrived,
+        since it is asked on every message.
+        """
+        cur = self._cur
+        assert cur is not None
+        phase = self.phase
+        if phase is Phase.STATES:
+            need, kind = len(self.contacts), "state"
+        elif phase is Phase.CELLS:
+            need, kind = len(self.contacts), "cell"
+        elif phase is Phase.TRANSFERS:
+            need, kind = len(cur.transfer_peers), "own"
+        elif phase is Phase.PHANTOMS:
+            need, kind = len(cur.phantom_peers), "phantom"
+        else:
+            return False
+        mail = self._mail.get((cur.step, kind))
+        if (0 if mail is None else len(mail)) < need:
+            return True
+        return bool(self._missing())
 
     def _missing(self) -> set[int]:
         """Peers the current wait still needs to hear from (empty if not waiting)."""
@@ -438,6 +559,7 @@ class RobotFilter:
         for src, msg in self._mail[(cur.step, "cell")].items():
             cur.cells[src] = (np.asarray(msg.vertices).reshape(-1, 2),
                               tuple(msg.neighbour_ids))
+        cur.cell_ids, cur.cell_lo, cur.cell_hi = _bounding_boxes(cur.cells)
         self._check_cell()
         cur.owned = self._owned_bins(cur.cell, cur.ids, cur.positions, cur.weights)
         leaving = ~_isin_sorted(self.bins, cur.owned)
@@ -464,12 +586,18 @@ class RobotFilter:
                 out_bins[dst] = idx[owners == dst]
         out = []
         cum = self.ctx.cumulative
+
+        def payload(sel: np.ndarray) -> tuple:
+            return (self.bins[sel], self.weights[sel], self.alpha[sel] if cum else None,
+                    self.count[sel] if cum else None)
+
+        # Most transfers are empty: they share one set of empty arrays.
+        empty = payload(np.empty(0, dtype=np.int64))
         for dst in sorted(cur.transfer_peers):
-            sel = out_bins.get(dst, np.empty(0, dtype=np.int64))
+            sel = out_bins.get(dst)
             out.append(self._to(dst, TransferMsg(
-                self.robot_id, dst, cur.step, TransferKind.OWNERSHIP, self.bins[sel],
-                self.weights[sel], self.alpha[sel] if cum else None,
-                self.count[sel] if cum else None)))
+                self.robot_id, dst, cur.step, TransferKind.OWNERSHIP,
+                *(empty if sel is None else payload(sel)))))
         keep = ~leaving
         self._retained = (self.bins[keep], self.weights[keep],
                           self.alpha[keep] if cum else None, self.count[keep] if cum else None)
@@ -558,15 +686,14 @@ class RobotFilter:
             return peers
         lo, hi = cur.cell.min(axis=0), cur.cell.max(axis=0)
         reach = self.ctx.reach
-        for rid, (poly, _) in cur.cells.items():
-            if rid in self.dead or len(poly) == 0:
-                continue
-            # Bounding boxes further apart than the reach cannot hold closer polygons.
-            gap = np.maximum(np.maximum(poly.min(axis=0) - hi, lo - poly.max(axis=0)), 0.0)
-            if np.hypot(gap[0], gap[1]) > reach:
-                continue
-            if _polygon_distance(cur.cell, poly) <= reach:
-                peers.add(rid)
+        # Bounding boxes further apart than the reach cannot hold closer polygons.
+        gap = np.maximum(np.maximum(cur.cell_lo - hi, lo - cur.cell_hi), 0.0)
+        near = self._alive(cur.cell_ids) & ~(np.hypot(gap[:, 0], gap[:, 1]) > reach)
+        ids = cur.cell_ids[near]
+        if ids.size == 0:
+            return peers
+        dist = _polygon_distances(cur.cell, [cur.cells[rid][0] for rid in ids.tolist()])
+        peers.update(ids[dist <= reach].tolist())
         return peers
 
     def _add_phantoms(self) -> None:
@@ -593,23 +720,19 @@ class RobotFilter:
         cur = self._cur
         assert cur is not None
         grid, radius = self.ctx.grid, self.ctx.models.detection.radius
-        fov = grid.disk_bins(cur.position, radius)
+        fov = self.ctx.fov_bins(cur.position)
         owners = set()
         if fov.size:
-            owners = {int(i) for i in np.unique(cur.ids[assign_bins(
-                grid.centres_of(fov), cur.positions, cur.weights)])}
+            centres = grid.centres_of(fov)
+            fov_owners = cur.ids[assign_bins(centres, cur.positions, cur.weights)]
+            owners = set(np.unique(fov_owners).tolist())
         cur.scan_peers = owners - self.dead
         if fov.size:
-            self._check_coverage(grid.centres_of(fov))
+            self._check_coverage(centres, fov_owners)
         out = [self._to(dst, ScanMsg(self.robot_id, cur.step, cur.position, cur.z))
                for dst in sorted(cur.scan_peers - {self.robot_id})]
-        pending = set()
-        if self.bins.size:
-            for rid, q in zip(cur.ids, cur.positions, strict=True):
-                rid = int(rid)
-                if rid not in self.dead and fov_positions(grid, self.ctx.models, self.bins,
-                                                          q).size:
-                    pending.add(rid)
+        meet = grid.disks_meet(self.bins, cur.positions, radius)
+        pending = set(cur.ids[self._alive(cur.ids) & meet].tolist())
         # The active robot coordinates its own update even without bins in its field of
         # view (a power cell need not contain its generator).
         if len(cur.z) and cur.scan_peers - {self.robot_id}:
@@ -632,10 +755,8 @@ class RobotFilter:
                 if scan is None:
                     return out
                 sensor, z = np.asarray(scan.sensor), np.asarray(scan.z).reshape(-1, 2)
-            grid, models = self.ctx.grid, self.ctx.models
-            pos = fov_positions(grid, models, self.bins, sensor)
-            centres = grid.centres_of(self.bins[pos])
-            psi_zx = psi(models, centres, z, sensor)
+            models = self.ctx.models
+            pos, psi_zx, pd = self._fov_terms(j, sensor, z)
             if len(z) == 0:
                 eta = np.empty(0)
             elif j == self.robot_id:
@@ -660,14 +781,47 @@ class RobotFilter:
                 if eta.shape != (len(z),):
                     raise ProtocolError(f"robot {self.robot_id}: eta totals of robot {j} "
                                         f"have {eta.shape} values for {len(z)} measurements")
-            pd = models.detection.probability(centres, sensor)
             self.weights[pos] = update_weights(self.weights[pos], pd, psi_zx, eta)
             if self.ctx.cumulative:
-                self.alpha, self.count = cumulative_update(self.alpha, self.count, pos,
-                                                           len(z) > 0)
+                # Chen eq. 9-10, one observation per scan; applied at the end of the step.
+                if cur.observed is None:
+                    cur.observed = np.zeros(self.bins.size, dtype=np.int64)
+                    cur.rewarded = np.zeros(self.bins.size, dtype=np.int64)
+                cur.observed[pos] += 1
+                if len(z):
+                    cur.rewarded[pos] += 1
             cur.pending.pop(0)
+        if cur.observed is not None:
+            self.alpha, self.count = cumulative_update_counts(self.alpha, self.count,
+                                                              cur.observed, cur.rewarded)
         self._finish_step()
         return out
+
+    def _fov_terms(self, j: int, sensor: np.ndarray,
+                   z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Own bins in robot j's field of view, psi (eq. 6) and p_d there, for this step.
+
+        Kept for the pending id j, since :meth:`_update_next` runs again on every message
+        while j's update waits; none of them depends on the weights.
+
+        Returns
+        -------
+        pos : np.ndarray of int64, shape (K_in,)
+            Positions in :attr:`bins` of the bins in the field of view.
+        psi_zx : np.ndarray, shape (M, K_in)
+            psi of j's measurements at those bins [1/m^2].
+        pd : np.ndarray, shape (K_in,)
+            p_d of those bins for j's sensor.
+        """
+        cur = self._cur
+        assert cur is not None
+        if cur.fov_terms is None or cur.fov_terms[0] != j:
+            grid, models = self.ctx.grid, self.ctx.models
+            # fov_positions on the ascending own bins, without checking their order again.
+            pos = _positions_in_sorted(self.bins, self.ctx.fov_bins(sensor))
+            psi_zx, pd = psi_pd(models, grid.centres_of(self.bins[pos]), z, sensor)
+            cur.fov_terms = (j, pos, psi_zx, pd)
+        return cur.fov_terms[1:]
 
     def _finish_step(self) -> None:
         cur = self._cur
@@ -676,10 +830,10 @@ class RobotFilter:
         two_hop = set(self.neighbours)
         for n in self.neighbours:
             two_hop.update(cur.cells.get(n, (None, ()))[1])
-        for rid, (q, rho, radius) in self._known_states().items():
-            if self.ctx.are_contacts(cur.position, cur.power_weight, cur.radius, q, rho,
-                                     radius):
-                two_hop.add(rid)
+        known = self._known_states()
+        near = self.ctx.contact_mask(cur.position, cur.power_weight, cur.radius,
+                                     known.positions, known.power_weights, known.cell_radii)
+        two_hop.update(known.ids[near].tolist())
         two_hop.discard(self.robot_id)
         self.contacts = tuple(sorted(two_hop - self.dead))
         self.cell_radius = _cell_radius(cur.position, cur.cell)
@@ -687,44 +841,67 @@ class RobotFilter:
         self._drop_stale(cur.step + 1)
 
     # ----------------------------------------------------------------- helpers
-    def _known_states(self) -> dict[int, tuple[np.ndarray, float, float]]:
-        """(position, rho, cell radius) of the contacts and of their contacts, this step."""
+    def _known_states(self) -> _Known:
+        """States of the contacts and of their contacts, this step (not self, not dead).
+
+        The contact tables relayed in the cells are read in arrival order, later tables
+        overriding earlier ones, and the contacts' own states override them all.
+        """
         cur = self._cur
         assert cur is not None
         if cur.known is not None:
             return cur.known
-        known: dict[int, tuple[np.ndarray, float, float]] = {}
-        for msg in self._mail[(cur.step, "cell")].values():
-            for i, rid in enumerate(msg.contact_ids):
-                known[int(rid)] = (np.asarray(msg.contact_positions[i], dtype=float),
-                                   float(msg.contact_power_weights[i]),
-                                   float(msg.contact_cell_radii[i]))
-        for rid, msg in self._mail[(cur.step, "state")].items():
-            known[rid] = (np.asarray(msg.position, dtype=float), float(msg.power_weight),
-                          float(msg.cell_radius))
-        known.pop(self.robot_id, None)
-        for rid in self.dead:
-            known.pop(rid, None)
-        cur.known = known
-        return known
+        states = self._mail[(cur.step, "state")]
+        # A table naming only robots whose own states arrived (or self, or the dead) adds
+        # nothing: those entries are overridden or dropped below. Skipping such tables
+        # first saves converting every table when everybody is everybody's contact.
+        covered = set(states) | self.dead | {self.robot_id}
+        cells = [m for m in self._mail[(cur.step, "cell")].values()
+                 if not covered.issuperset(m.contact_ids)]
+        ids = [np.asarray(m.contact_ids, dtype=np.int64).reshape(-1) for m in cells]
+        ids.append(np.fromiter(states, dtype=np.int64, count=len(states)))
+        pos = [np.asarray(m.contact_positions, dtype=float).reshape(-1, 2) for m in cells]
+        pos.append(np.array([m.position for m in states.values()], dtype=float).reshape(-1, 2))
+        rho = [np.asarray(m.contact_power_weights, dtype=float).reshape(-1) for m in cells]
+        rho.append(np.array([m.power_weight for m in states.values()], dtype=float))
+        radii = [np.asarray(m.contact_cell_radii, dtype=float).reshape(-1) for m in cells]
+        radii.append(np.array([m.cell_radius for m in states.values()], dtype=float))
+        all_ids = np.concatenate(ids)
+        # The last entry of each id wins: its first occurrence in the reversed list.
+        uniq, first = np.unique(all_ids[::-1], return_index=True)
+        last = all_ids.size - 1 - first
+        drop = np.fromiter(self.dead | {self.robot_id}, dtype=np.int64)
+        keep = ~np.isin(uniq, drop)
+        last = last[keep]
+        cur.known = _Known(uniq[keep], np.concatenate(pos)[last], np.concatenate(rho)[last],
+                           np.concatenate(radii)[last])
+        return cur.known
 
     def _check_cell(self) -> None:
         """Count a cell that the contacts' contacts would cut (a missed neighbour)."""
         cur = self._cur
         assert cur is not None
         known = self._known_states()
-        extra = sorted(set(known) - set(int(i) for i in cur.ids))
-        if not extra or len(cur.cell) == 0:
+        extra = ~_isin_sorted(known.ids, cur.ids)
+        if not extra.any() or len(cur.cell) == 0:
             return
-        ids = np.array(sorted(set(int(i) for i in cur.ids) | set(extra)), dtype=np.int64)
-        pos = np.array([cur.position if i == self.robot_id else known[i][0] for i in ids])
-        rho = np.array([cur.power_weight if i == self.robot_id else known[i][1] for i in ids])
+        ids = np.concatenate([cur.ids, known.ids[extra]])
+        order = np.argsort(ids, kind="stable")
+        ids = ids[order]
+        pos = np.concatenate([cur.positions, known.positions[extra]])[order]
+        rho = np.concatenate([cur.weights, known.power_weights[extra]])[order]
         poly, _ = cell_of(self.ctx.grid.env, int(np.searchsorted(ids, self.robot_id)), pos,
                           rho)
         if poly.shape != cur.cell.shape or not np.allclose(poly, cur.cell, atol=1e-9):
             self.stats["cell_mismatch"] += 1
             _log.warning("robot %d: its cell at step %d misses a neighbour known only to "
                          "its contacts", self.robot_id, cur.step)
+
+    def _alive(self, ids: np.ndarray) -> np.ndarray:
+        """Which of the robot ids ``ids`` (N,) are not declared dead, bool (N,)."""
+        if not self.dead:
+            return np.ones(len(ids), dtype=bool)
+        return ~np.isin(ids, np.fromiter(self.dead, dtype=np.int64, count=len(self.dead)))
 
     def _declare_dead(self, ids: set[int]) -> None:
         self.dead |= ids
@@ -740,22 +917,29 @@ class RobotFilter:
             cur.pending.pop(0)
         cur.pending = [j for j in cur.pending if j not in ids]
 
-    def _check_coverage(self, points: np.ndarray) -> None:
-        """Count field-of-view bins outside every known cell (an unknown robot owns them)."""
+    def _check_coverage(self, points: np.ndarray, owners: np.ndarray) -> None:
+        """Count field-of-view bins outside every known cell (an unknown robot owns them).
+
+        ``owners`` (N,) are the ids of the robots owning the ``points`` (N, 2): the cells
+        are tried in decreasing number of points owned, so that most points are found in
+        the first few cells (the count does not depend on the order).
+        """
         cur = self._cur
         assert cur is not None
         tol = 1e-9 * (self.ctx.grid.env.width + self.ctx.grid.env.height)
         covered = points_in_polygon(points, cur.cell, tol) if len(cur.cell) else \
             np.zeros(len(points), dtype=bool)
+        if covered.all():
+            return
+        # Only cells whose boxes meet the box of all the points can hold any of them.
         lo, hi = points.min(axis=0), points.max(axis=0)
-        for rid, (poly, _) in cur.cells.items():
-            if covered.all():
-                return
-            if rid in self.dead or len(poly) == 0:
-                continue
-            if np.any(poly.min(axis=0) > hi) or np.any(poly.max(axis=0) < lo):
-                continue
-            covered[~covered] = points_in_polygon(points[~covered], poly, tol)
+        near = (self._alive(cur.cell_ids) & np.all(cur.cell_lo <= hi, axis=1)
+                & np.all(cur.cell_hi >= lo, axis=1))
+        ids = cur.cell_ids[near]
+        owned = (owners[~covered][:, None] == ids[None, :]).sum(axis=0)
+        ids = ids[np.argsort(-owned, kind="stable")]
+        polys = [cur.cells[rid][0] for rid in ids.tolist()]
+        covered[~covered] = points_in_any_polygon(points[~covered], polys, tol)
         if not covered.all():
             self.stats["uncovered_fov_bins"] += int((~covered).sum())
             _log.warning("robot %d: %d field-of-view bins lie in no known cell at step %d",
@@ -774,11 +958,8 @@ class RobotFilter:
         ix1 = min(int(np.ceil((hi[0] - env.xmin) / res)), grid.nx - 1)
         iy0 = max(int(np.floor((lo[1] - env.ymin) / res)), 0)
         iy1 = min(int(np.ceil((hi[1] - env.ymin) / res)), grid.ny - 1)
-        iy, ix = np.meshgrid(np.arange(iy0, iy1 + 1), np.arange(ix0, ix1 + 1), indexing="ij")
-        flat = (iy * grid.nx + ix).ravel()
-        rows = assign_bins(grid.centres_of(flat), positions, rho)
         me = int(np.searchsorted(ids, self.robot_id))
-        return flat[rows == me]
+        return bins_owned_in_box(grid, me, positions, rho, (iy0, iy1, ix0, ix1))
 
     def _to(self, dst: int, msg: Message) -> Envelope:
         return Envelope(self.robot_id, int(dst), msg)
@@ -788,20 +969,27 @@ class RobotFilter:
             del self._mail[key]
 
 
+#: Mail kinds of the messages whose key is (step, kind), by exact type.
+_PLAIN_MAIL = {StateMsg: "state", CellMsg: "cell", ScanMsg: "scan"}
+
+
 def _mail_key(msg: Message) -> tuple:
+    kind = _PLAIN_MAIL.get(type(msg))
+    if kind is not None:
+        return (msg.step, kind)
+    if isinstance(msg, TransferMsg):
+        kind = "own" if msg.kind == TransferKind.OWNERSHIP else "phantom"
+        return (msg.step, kind)
+    if isinstance(msg, EtaPartialMsg):
+        return (msg.step, "partial", msg.active_id)
+    if isinstance(msg, EtaTotalMsg):
+        return (msg.step, "total", msg.active_id)
     if isinstance(msg, StateMsg):
         return (msg.step, "state")
     if isinstance(msg, CellMsg):
         return (msg.step, "cell")
     if isinstance(msg, ScanMsg):
         return (msg.step, "scan")
-    if isinstance(msg, EtaPartialMsg):
-        return (msg.step, "partial", msg.active_id)
-    if isinstance(msg, EtaTotalMsg):
-        return (msg.step, "total", msg.active_id)
-    if isinstance(msg, TransferMsg):
-        kind = "own" if msg.kind == TransferKind.OWNERSHIP else "phantom"
-        return (msg.step, kind)
     raise TypeError(f"not a protocol message: {type(msg).__name__}")
 
 
@@ -812,6 +1000,30 @@ def _cell_radius(q: np.ndarray, cell: np.ndarray) -> float:
     return float(np.sqrt(((np.asarray(cell) - np.asarray(q)[None, :2]) ** 2).sum(axis=1).max()))
 
 
+def _bounding_boxes(cells: dict[int, tuple[np.ndarray, tuple[int, ...]]]
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Ids (N,), lower (N, 2) and upper (N, 2) box corners of the non-empty cells [m].
+
+    The cells are taken in the dict's order; empty ones are left out.
+    """
+    ids = [rid for rid, (poly, _) in cells.items() if len(poly)]
+    if not ids:
+        return np.empty(0, dtype=np.int64), np.empty((0, 2)), np.empty((0, 2))
+    polys = [cells[rid][0] for rid in ids]
+    starts = np.cumsum([0] + [len(p) for p in polys[:-1]])
+    vertices = np.concatenate(polys)
+    return (np.array(ids, dtype=np.int64), np.minimum.reduceat(vertices, starts, axis=0),
+            np.maximum.reduceat(vertices, starts, axis=0))
+
+
+def _positions_in_sorted(sorted_set: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Positions in the ascending ``sorted_set`` of those ``values`` it holds, int64 (K,)."""
+    if sorted_set.size == 0 or values.size == 0:
+        return np.empty(0, dtype=np.int64)
+    pos = np.minimum(np.searchsorted(sorted_set, values), sorted_set.size - 1)
+    return pos[sorted_set[pos] == values]
+
+
 def _isin_sorted(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
     """Membership of ``values`` in the ascending array ``sorted_set``."""
     if sorted_set.size == 0:
@@ -820,23 +1032,33 @@ def _isin_sorted(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
     return sorted_set[pos] == values
 
 
-def _polygon_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """Distance between two convex polygons [m] (0 if they touch or overlap)."""
-    if points_in_polygon(a, b, tol=1e-9).any() or points_in_polygon(b, a, tol=1e-9).any():
-        return 0.0
-    return min(_points_to_edges(a, b), _points_to_edges(b, a))
+def _polygon_distances(a: np.ndarray, polys: list[np.ndarray]) -> np.ndarray:
+    """Distance between the convex polygon ``a`` and each of ``polys`` [m], shape (P,).
+
+    0 where they touch or overlap (a vertex of one within 1e-9 m of the other), else the
+    smallest vertex-to-edge distance either way. All polygons are handled in one array
+    operation per term, with the same float expressions per (vertex, edge) pair as for a
+    single pair, so the result does not depend on which polygons are grouped together.
+    """
+    b, starts, following = stack_polygons(polys)
+    a_in_b = points_in_polygons(a, polys, tol=1e-9).any(axis=0)
+    b_in_a = np.logical_or.reduceat(points_in_polygon(b, a, tol=1e-9), starts)
+    # Vertices of a to the edges of every b, and vertices of every b to the edges of a.
+    a_to_b = np.minimum.reduceat(_points_to_edges2(a, b, b[following]).min(axis=0), starts)
+    b_to_a = np.minimum.reduceat(
+        _points_to_edges2(b, a, np.roll(a, -1, axis=0)).min(axis=1), starts)
+    dist = np.minimum(np.sqrt(a_to_b), np.sqrt(b_to_a))
+    return np.where(a_in_b | b_in_a, 0.0, dist)
 
 
-def _points_to_edges(points: np.ndarray, poly: np.ndarray) -> float:
-    """Smallest distance from ``points`` (P, 2) to the edges of ``poly`` (V, 2)."""
-    p0 = poly
-    p1 = np.roll(poly, -1, axis=0)
+def _points_to_edges2(points: np.ndarray, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Squared distance from each of ``points`` (P, 2) to each edge p0 -> p1 (E, 2), (P, E)."""
     d = p1 - p0
     len2 = np.maximum((d * d).sum(axis=1), 1e-300)
     rel = points[:, None, :] - p0[None, :, :]
     t = np.clip((rel * d[None]).sum(axis=2) / len2, 0.0, 1.0)
     closest = p0[None] + t[..., None] * d[None]
-    return float(np.sqrt(((points[:, None, :] - closest) ** 2).sum(axis=2).min()))
+    return ((points[:, None, :] - closest) ** 2).sum(axis=2)
 
 
 __all__ = ["FilterContext", "Phase", "ProtocolError", "RobotFilter"]
