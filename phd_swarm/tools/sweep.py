@@ -1,0 +1,562 @@
+"""Parameter sweeps on the in-memory engine: the papers' box plots, trial by trial.
+
+``scripts/sweep.sh SPEC [--quick] [--workers N] [--out DIR] [--plot-only] [--dry-run]``
+
+SPEC is a name under ``config/sweeps/`` or a path to a spec file
+(:mod:`phd_swarm.tools.sweep_spec`). The specs in the repository reproduce Dames (2020)
+Fig. 2 (static targets, final OSPA) and Fig. 5 (moving targets, mean OSPA over the last
+250 s), and Chen, Dames & Park (2021) Fig. 3a/b (clustered targets, median OSPA over
+300-1000 s, and the mean OSPA over time).
+
+Each trial runs :class:`phd_swarm.sim.engine.InMemoryEngine`, which computes exactly the
+ROS stack's team PHD, and scores every step with
+:func:`phd_swarm.core.scoring.score_step`, as the live monitor does: the truth X^k is taken
+before step k and compared with the team PHD after the step's update (OSPA, Dames eq. 12,
+c = 10 m, p = 1). A trial's result depends only on its scenario (seed included) and
+controller, never on the worker or the order.
+
+Outputs in ``<out>`` (default ``runs/sweeps/<name>`` or ``runs/sweeps/<name>_quick``):
+
+- ``results.csv``: one row per finished trial (:data:`COLUMNS`), appended and flushed as
+  each trial finishes. Running the same command again skips the trials already there; a
+  row whose ``config_hash`` does not match the spec's trial (the spec or the scenario
+  presets changed) stops the sweep with an error instead of mixing results.
+- ``series/<trial>.npz``: the per-step series of a trial (t, OSPA and its parts, true,
+  estimated and expected cardinality), written before its CSV row.
+- ``logs/<trial>.log``: the log lines of a trial (protocol warnings) and the error of a
+  failed one, when there are any.
+- ``spec.json`` (the resolved spec), ``sweep.json`` (wall and CPU time and failed trials of
+  every session),
+  and the plots and ``summary.csv`` / ``summary.md`` of :mod:`phd_swarm.tools.sweep_plots`.
+
+Exit codes: 0 done, 1 some trials failed (rerun to retry them), 2 bad spec or results that
+belong to another spec, 130 interrupted (finished rows are kept; rerun to resume).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime as _dt
+import io
+import json
+import logging
+import math
+import multiprocessing as mp
+import os
+import resource
+import signal
+import sys
+import time
+import traceback
+from collections.abc import Iterable
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from phd_swarm.tools.sweep_spec import SpecError, SweepSpec, Trial, find_spec, load_spec
+
+#: Columns of results.csv, in order.
+COLUMNS = ("spec", "trial", "method", "controller", "robots", "targets", "resolution",
+           "seed", "trial_index", "steps", "duration_s", "metric", "value", "ospa_final",
+           "ospa_mean_window", "ospa_median_window", "window_start_s", "window_end_s",
+           "cardinality_true_final", "cardinality_est_final", "expected_cardinality_final",
+           "cardinality_true_mean_window", "wall_s", "cpu_s", "config_hash")
+
+#: Columns that differ between two runs of the same trial (timings).
+TIMING_COLUMNS = ("wall_s", "cpu_s")
+
+#: Per-step series saved for each trial (``series/<trial>.npz``).
+SERIES = ("t", "ospa", "ospa_localisation", "ospa_cardinality", "cardinality_true",
+          "cardinality_est", "expected_cardinality")
+
+#: Threading variables set to 1 in the workers: one process per core, no oversubscription.
+THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+               "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")
+
+_INT_COLUMNS = ("robots", "targets", "seed", "trial_index", "steps",
+                "cardinality_true_final", "cardinality_est_final")
+_FLOAT_COLUMNS = ("resolution", "duration_s", "value", "ospa_final", "ospa_mean_window",
+                  "ospa_median_window", "window_start_s", "window_end_s",
+                  "expected_cardinality_final", "cardinality_true_mean_window", "wall_s",
+                  "cpu_s")
+
+
+# --------------------------------------------------------------------------- one trial
+def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Run one trial to the end and score it.
+
+    Returns
+    -------
+    row : dict
+        The trial's results.csv row (:data:`COLUMNS`; ``spec`` left empty).
+    series : dict of str to np.ndarray
+        Per-step arrays (:data:`SERIES`), shape (steps,); ``t = k dt`` [s].
+    """
+    from phd_swarm.core.scoring import score_step
+    from phd_swarm.sim.engine import InMemoryEngine
+
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    sc = trial.scenario
+    engine = InMemoryEngine(sc, trial.controller)
+    n = sc.steps
+    s = {name: np.zeros(n) for name in SERIES}
+    for k in range(n):
+        _, truth = engine.world.truth()
+        engine.step()
+        score = score_step(sc.grid, engine.team_weights(), truth, sc.extraction, sc.ospa_c,
+                           sc.ospa_p)
+        s["t"][k] = k * sc.dt
+        for name, value in score.row().items():
+            s[name][k] = value
+    ospa = s["ospa"]
+    a, b = trial.window
+    in_window = (s["t"] >= a - 1e-9) & (s["t"] <= b + 1e-9)
+    stats = {"final": float(ospa[-1]), "mean": float(np.mean(ospa[in_window])),
+             "median": float(np.median(ospa[in_window]))}
+    row = {"spec": "", "trial": trial.key, "method": trial.method,
+           "controller": trial.controller, "robots": trial.robots, "targets": trial.targets,
+           "resolution": trial.resolution, "seed": trial.seed, "trial_index": trial.index,
+           "steps": n, "duration_s": n * sc.dt, "metric": trial.metric,
+           "value": stats[trial.metric], "ospa_final": stats["final"],
+           "ospa_mean_window": stats["mean"], "ospa_median_window": stats["median"],
+           "window_start_s": a, "window_end_s": b,
+           "cardinality_true_final": int(s["cardinality_true"][-1]),
+           "cardinality_est_final": int(s["cardinality_est"][-1]),
+           "expected_cardinality_final": float(s["expected_cardinality"][-1]),
+           "cardinality_true_mean_window": float(np.mean(s["cardinality_true"][in_window])),
+           "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0,
+           "config_hash": trial.config_hash}
+    return row, s
+
+
+class _Collect(logging.Handler):
+    """Keeps the log lines of the trial running in this worker."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.lines: list[str] = []
+        self.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append(self.format(record))
+
+
+_COLLECT = _Collect()
+
+
+def _init_worker() -> None:
+    # Ctrl-C reaches the whole process group; only the parent handles it (and terminates
+    # the workers), so a worker never dies half-way through writing anything.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # The protocol's warnings (e.g. a cell that misses a neighbour) go to the trial's log
+    # file instead of interleaving with the progress lines.
+    log = logging.getLogger("phd_swarm")
+    log.addHandler(_COLLECT)
+    log.setLevel(logging.INFO)
+    log.propagate = False
+
+
+def _work(trial: Trial) -> tuple[Trial, dict | None, dict | None, str | None, list[str]]:
+    _COLLECT.lines = []
+    try:
+        row, series = run_trial(trial)
+        return trial, row, series, None, _COLLECT.lines
+    except Exception as exc:  # noqa: BLE001 (reported, the sweep goes on)
+        tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
+        return trial, None, None, tb, _COLLECT.lines
+
+
+# ------------------------------------------------------------------------ results file
+class ResultsFile:
+    """results.csv: read the finished rows, append new ones one by one, flushed.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file (created with a header if missing).
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.rows: dict[str, dict[str, Any]] = {}
+        if path.exists():
+            self._read()
+
+    def _read(self) -> None:
+        text = self.path.read_text()
+        if text and not text.endswith("\n"):
+            # A row cut short by a crash: drop it, its trial runs again.
+            text = text[: text.rfind("\n") + 1]
+            self.path.write_text(text)
+        if not text:
+            return
+        reader = csv.DictReader(io.StringIO(text))
+        if tuple(reader.fieldnames or ()) != COLUMNS:
+            raise SpecError(f"{self.path}: columns {reader.fieldnames} are not those of "
+                            f"this version of the sweep tool; use another --out")
+        for line, raw in enumerate(reader, start=2):
+            try:
+                self.rows[raw["trial"]] = parse_row(raw)
+            except (TypeError, ValueError) as exc:
+                raise SpecError(f"{self.path}: line {line}: {exc}") from None
+
+    def append(self, row: dict[str, Any]) -> None:
+        """Append ``row`` and flush it to disk."""
+        new = not self.path.exists() or self.path.stat().st_size == 0
+        with open(self.path, "a", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            if new:
+                w.writeheader()
+            w.writerow(row)
+            f.flush()
+            os.fsync(f.fileno())
+        self.rows[row["trial"]] = row
+
+
+def parse_row(raw: dict[str, str]) -> dict[str, Any]:
+    """A results.csv row with its numbers parsed."""
+    row: dict[str, Any] = dict(raw)
+    for c in _INT_COLUMNS:
+        row[c] = int(raw[c])
+    for c in _FLOAT_COLUMNS:
+        row[c] = float(raw[c])
+    return row
+
+
+def save_series(path: Path, series: dict[str, np.ndarray], config_hash: str) -> None:
+    """Write ``series`` to ``path`` (.npz) atomically."""
+    tmp = path.with_suffix(".tmp")
+    with open(tmp, "wb") as f:
+        np.savez(f, config_hash=np.array(config_hash), **series)
+    os.replace(tmp, path)
+
+
+def load_series(path: Path) -> dict[str, np.ndarray]:
+    """The per-step series of one trial (:data:`SERIES` and ``config_hash``)."""
+    with np.load(path) as z:
+        return {k: z[k] for k in z.files}
+
+
+# ---------------------------------------------------------------------------- progress
+def _hms(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "?"
+    s = int(round(seconds))
+    if s >= 3600:
+        return f"{s // 3600}h{s % 3600 // 60:02d}m"
+    if s >= 60:
+        return f"{s // 60}m{s % 60:02d}s"
+    return f"{s}s"
+
+
+class Progress:
+    """Progress on a stream: a bar redrawn in place on a TTY, else one line per trial.
+
+    The ETA scales the time spent so far by the estimated cost still to run
+    (:meth:`Trial.cost`), so big trials count for more than small ones.
+    """
+
+    def __init__(self, name: str, todo: list[Trial], skipped: int, stream: IO[str],
+                 tty: bool | None = None) -> None:
+        self.name = name
+        self.total = len(todo) + skipped
+        self.done = skipped
+        self.failed = 0
+        self.stream = stream
+        self.tty = stream.isatty() if tty is None else tty
+        self.cost_left = sum(t.cost() for t in todo)
+        self.cost_done = 0.0
+        self.t0 = time.monotonic()
+        self._drawn = False
+
+    def eta(self) -> float:
+        """Estimated seconds to the end (inf before the first trial ends)."""
+        if self.cost_done <= 0:
+            return math.inf
+        return (time.monotonic() - self.t0) * self.cost_left / self.cost_done
+
+    def _status(self) -> str:
+        el = time.monotonic() - self.t0
+        fail = f", {self.failed} failed" if self.failed else ""
+        return (f"{self.done}/{self.total}{fail}  elapsed {_hms(el)}  "
+                f"ETA {_hms(self.eta()) if self.cost_left > 0 else '0s'}")
+
+    def tick(self) -> None:
+        """Redraw the bar (TTY only)."""
+        if not self.tty:
+            return
+        width = 28
+        filled = int(width * self.done / self.total) if self.total else width
+        bar = "#" * filled + "-" * (width - filled)
+        self.stream.write(f"\r\x1b[Ksweep {self.name} [{bar}] {self._status()}")
+        self.stream.flush()
+        self._drawn = True
+
+    def finished(self, trial: Trial, row: dict | None, error: str | None) -> None:
+        """Count a trial as done (or failed) and report it."""
+        self.cost_left -= trial.cost()
+        self.cost_done += trial.cost()
+        self.done += 1
+        if error is not None:
+            self.failed += 1
+            self.message(f"trial {trial.key} failed: {error}")
+        elif not self.tty:
+            assert row is not None
+            final = ("" if row["metric"] == "final"
+                     else f" (final {row['ospa_final']:.3f} m)")
+            self.stream.write(f"sweep {self.name}: {trial.key}: {row['metric']} OSPA "
+                              f"{row['value']:.3f} m{final}, {row['wall_s']:.1f} s | "
+                              f"{self._status()}\n")
+            self.stream.flush()
+        self.tick()
+
+    def message(self, text: str) -> None:
+        """Print a line above the bar."""
+        if self.tty and self._drawn:
+            self.stream.write("\r\x1b[K")
+        self.stream.write(text + "\n")
+        self.stream.flush()
+        self.tick()
+
+    def close(self) -> None:
+        """End the bar's line."""
+        if self.tty and self._drawn:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+# ------------------------------------------------------------------------------ sweep
+def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial], int]:
+    """Split the spec's trials into done and to-do; count stray rows.
+
+    Returns
+    -------
+    done, todo : list of Trial
+        Trials with a matching row, and the rest (longest first: shorter makespan).
+    stray : int
+        Rows of results.csv that are no trial of this spec (ignored).
+
+    Raises
+    ------
+    SpecError
+        If a row has a trial's key but another ``config_hash``.
+    """
+    trials = spec.trials_list()
+    done, todo, clash = [], [], []
+    for t in trials:
+        row = results.rows.get(t.key)
+        if row is None:
+            todo.append(t)
+        elif row["config_hash"] == t.config_hash:
+            done.append(t)
+        else:
+            clash.append(t.key)
+    if clash:
+        raise SpecError(
+            f"{results.path}: {len(clash)} row(s) hold results of the same trials run with "
+            f"other settings (e.g. {clash[0]}): the spec, the presets or the tool changed "
+            f"since. Use another --out, or delete those rows (or the file) to run them "
+            f"again.")
+    keys = {t.key for t in trials}
+    stray = sum(1 for k in results.rows if k not in keys)
+    todo.sort(key=lambda t: -t.cost())
+    return done, todo, stray
+
+
+def _pool(workers: int):
+    """A pool of ``workers`` fresh (spawned) processes with one thread each."""
+    saved = {v: os.environ.get(v) for v in THREAD_VARS}
+    os.environ.update({v: "1" for v in THREAD_VARS})
+    try:
+        return mp.get_context("spawn").Pool(workers, initializer=_init_worker)
+    finally:
+        for v, old in saved.items():
+            if old is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = old
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out: Path,
+               workers: int, progress: Progress) -> tuple[dict[str, str], bool]:
+    """Run ``todo`` on ``workers`` processes, writing each result as it arrives.
+
+    A trial's series goes to ``out/series/<trial>.npz`` before its row is appended to
+    ``results``; its log lines (protocol warnings), if any, to ``out/logs/<trial>.log``.
+
+    Returns
+    -------
+    failed : dict of str to str
+        Trial key -> the exception of each trial that raised.
+    interrupted : bool
+        True if Ctrl-C (or SIGTERM) stopped the sweep; the workers are terminated and the
+        rows already written are kept.
+    """
+    todo = list(todo)
+    failed: dict[str, str] = {}
+    if not todo:
+        return failed, False
+    series_dir, logs_dir = out / "series", out / "logs"
+    series_dir.mkdir(parents=True, exist_ok=True)
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    pool = None
+    try:
+        pool = _pool(min(workers, len(todo)))
+        it = pool.imap_unordered(_work, todo, chunksize=1)
+        progress.tick()
+        while True:
+            try:
+                trial, row, series, error, log_lines = it.next(timeout=1.0)
+            except mp.TimeoutError:
+                progress.tick()
+                continue
+            except StopIteration:
+                break
+            log_file = logs_dir / f"{trial.key}.log"
+            if log_lines or error:
+                logs_dir.mkdir(exist_ok=True)
+                log_file.write_text("\n".join([*log_lines, *([error] if error else [])])
+                                    + "\n")
+            elif log_file.exists():
+                log_file.unlink()
+            if error is None:
+                assert row is not None and series is not None
+                row["spec"] = spec.name
+                save_series(series_dir / f"{trial.key}.npz", series, trial.config_hash)
+                results.append(row)
+            else:
+                failed[trial.key] = error
+            progress.finished(trial, row, error)
+        pool.close()
+        pool.join()
+        return failed, False
+    except KeyboardInterrupt:
+        if pool is not None:
+            pool.terminate()
+            pool.join()
+        return failed, True
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
+
+
+def _cpu_seconds() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _log_session(out: Path, session: dict[str, Any]) -> dict[str, Any]:
+    path = out / "sweep.json"
+    doc: dict[str, Any] = {"sessions": []}
+    if path.exists():
+        try:
+            doc = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            pass
+    doc.setdefault("sessions", []).append(session)
+    doc["wall_s"] = sum(s["wall_s"] for s in doc["sessions"])
+    doc["cpu_s"] = sum(s["cpu_s"] for s in doc["sessions"])
+    path.write_text(json.dumps(doc, indent=2) + "\n")
+    return doc
+
+
+def default_out(spec: SweepSpec) -> Path:
+    """``runs/sweeps/<name>[_quick]`` under the repository (``$PHD_SWARM_ROOT``) or here."""
+    root = os.environ.get("PHD_SWARM_ROOT")
+    return (Path(root) if root else Path.cwd()) / "runs" / "sweeps" / spec.label
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Command-line options (see the module docstring)."""
+    p = argparse.ArgumentParser(prog="scripts/sweep.sh",
+                                description="Run a parameter sweep (config/sweeps/*.yaml) on "
+                                            "the in-memory engine; results, plots and a "
+                                            "summary in runs/sweeps/<name>/.")
+    p.add_argument("spec", help="spec name under config/sweeps/ or path to a spec file")
+    p.add_argument("--quick", action="store_true", help="the spec's quick form")
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="N",
+                   help="worker processes (default: the number of CPUs, %(default)s)")
+    p.add_argument("--out", type=Path, help="output directory (default "
+                                            "runs/sweeps/<name>[_quick])")
+    p.add_argument("--plot-only", action="store_true",
+                   help="only redraw the plots and summary from the existing results")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print how many trials would run and exit")
+    opts = p.parse_args(argv)
+    if opts.workers < 1:
+        p.error(f"--workers must be >= 1, got {opts.workers}")
+    return opts
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``scripts/sweep.sh``; returns the exit code."""
+    opts = parse_args(sys.argv[1:] if argv is None else argv)
+    wall0, cpu0 = time.monotonic(), _cpu_seconds()
+    started = _dt.datetime.now().isoformat(timespec="seconds")
+    try:
+        spec = load_spec(find_spec(opts.spec), quick=opts.quick)
+        out = opts.out or default_out(spec)
+        results = ResultsFile(out / "results.csv")
+        done, todo, stray = plan(spec, results)
+    except SpecError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    total = len(done) + len(todo)
+    print(f"sweep {spec.label}: {total} trials ({len(spec.methods)} methods x "
+          f"{len(spec.robots)} team sizes x {len(spec.targets)} target counts x "
+          f"{len(spec.resolutions)} resolutions x {spec.trials} seeds), {len(done)} done, "
+          f"{len(todo)} to run; results in {out}", flush=True)
+    if stray:
+        print(f"note: {stray} row(s) of {results.path} are not trials of this spec; "
+              f"ignored", flush=True)
+    if opts.dry_run:
+        return 0
+    from phd_swarm.tools.sweep_plots import write_report
+
+    failed: dict[str, str] = {}
+    interrupted = False
+    if not opts.plot_only:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "spec.json").write_text(json.dumps(spec.to_dict(), indent=2) + "\n")
+        progress = Progress(spec.label, todo, len(done), sys.stderr)
+        failed, interrupted = run_trials(spec, todo, results, out, opts.workers, progress)
+        progress.close()
+        session = {"started": started, "workers": opts.workers,
+                   "trials_run": progress.done - len(done) - len(failed),
+                   "trials_failed": len(failed), "failed": failed,
+                   "interrupted": interrupted, "wall_s": time.monotonic() - wall0,
+                   "cpu_s": _cpu_seconds() - cpu0}
+        timing = _log_session(out, session)
+        if interrupted:
+            print(f"interrupted: {len(results.rows)} rows kept in {results.path}; run the "
+                  f"same command again to resume", file=sys.stderr)
+            return 130
+    else:
+        path = out / "sweep.json"
+        timing = json.loads(path.read_text()) if path.exists() else {}
+    keys = {t.key: t for t in done + todo}
+    rows = [r for k, r in results.rows.items()
+            if k in keys and r["config_hash"] == keys[k].config_hash]
+    if not rows:
+        print(f"error: no results of this spec in {results.path}", file=sys.stderr)
+        return 2 if opts.plot_only else 1
+    written = write_report(spec, rows, out, timing)
+    wall = time.monotonic() - wall0
+    print(f"sweep {spec.label}: {len(rows)}/{total} trials in {results.path}; this session "
+          f"{_hms(wall)} wall, {_hms(_cpu_seconds() - cpu0)} CPU; plots and summary: "
+          + ", ".join(str(p.name) for p in written), flush=True)
+    if failed:
+        print(f"error: {len(failed)} trial(s) failed (errors in {out / 'logs'}); run the "
+              f"same command again to retry them", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Run a parameter sweep of the in-memory engine and plot it (Dames 2020 Fig. 2 and 5,
+# Chen, Dames & Park 2021 Fig. 3), see docs/sweeps.md.
+# Usage: scripts/sweep.sh SPEC [--quick] [--workers N] [--out DIR] [--plot-only] [--dry-run]
+#   SPEC: a name under config/sweeps/ (dames_static, dames_moving, chen_clustered,
+#   chen_resolution) or a path to a spec file.
+# Results: <out>/results.csv, series/, boxplot.png, ospa_vs_time.png, summary.md
+# (default out: runs/sweeps/<name> or runs/sweeps/<name>_quick). Rerun to resume.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$ROOT/scripts/setup.sh" >/dev/null
+# shellcheck source=scripts/env.sh
+source "$ROOT/scripts/env.sh"
+exec python -m phd_swarm.tools.sweep "$@"

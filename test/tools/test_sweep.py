@@ -1,0 +1,304 @@
+"""scripts/sweep.sh: spec validation, end-to-end runs, resuming, determinism, Ctrl-C."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phd_swarm.tools import sweep
+from phd_swarm.tools.sweep_spec import SpecError, find_spec, load_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+SWEEP = str(ROOT / "scripts" / "sweep.sh")
+
+#: A 30 x 30 m map, 2 seeds x 2 team sizes x 2 methods, 15 steps each: ~0.1 s a trial.
+TINY = """\
+preset: dames_static
+figure: tiny test sweep
+methods: {PHD: phd, uniform: uniform}
+robots: [2, 3]
+targets: [6]
+trials: 2
+base_seed: 5
+duration: 7.5
+metric: mean
+window: [2.5, 7.5]
+scenario:
+  env: {xmin: 0, ymin: 0, xmax: 30, ymax: 30}
+  robot_start_box: [10, 0, 20, 5]
+  targets: {draw_box: [-3, -3, 33, 33]}
+quick:
+  robots: [2]
+  trials: 1
+"""
+TINY_TRIALS = 8
+
+
+def _run(children, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    proc = children.start([SWEEP, *args])
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        children.stop(proc)
+        raise
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def _rows(path: Path) -> dict[str, dict[str, str]]:
+    with open(path, newline="") as f:
+        return {r["trial"]: r for r in csv.DictReader(f)}
+
+
+def _without_timing(rows: dict[str, dict[str, str]]) -> dict[str, dict[str, str]]:
+    return {k: {c: v for c, v in r.items() if c not in sweep.TIMING_COLUMNS}
+            for k, r in rows.items()}
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory) -> tuple[Path, Path]:
+    """The tiny spec and the output of its first run with 2 workers."""
+    from phd_swarm.testing import ChildProcesses
+
+    d = tmp_path_factory.mktemp("sweep")
+    spec = d / "tiny.yaml"
+    spec.write_text(TINY)
+    out = d / "two_workers"
+    with ChildProcesses() as children:
+        res = _run(children, str(spec), "--workers", "2", "--out", str(out))
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"{TINY_TRIALS} to run" in res.stdout
+    return spec, out
+
+
+@pytest.mark.slow
+def test_sweep_writes_rows_series_plots_and_summary(tiny):
+    spec, out = tiny
+    rows = _rows(out / "results.csv")
+    assert len(rows) == TINY_TRIALS
+    assert {r["method"] for r in rows.values()} == {"PHD", "uniform"}
+    assert {r["robots"] for r in rows.values()} == {"2", "3"}
+    assert {r["seed"] for r in rows.values()} == {"5", "6"}
+    for name in ("boxplot.png", "ospa_vs_time.png", "cardinality_vs_time.png"):
+        data = (out / name).read_bytes()
+        assert data.startswith(b"\x89PNG") and len(data) > 5000, name
+    summary = (out / "summary.md").read_text()
+    assert "| 2 |" in summary and "sweep wall time" in summary
+    with open(out / "summary.csv", newline="") as f:
+        assert len(list(csv.DictReader(f))) == 4          # 2 methods x 2 team sizes
+    # The row's figures are those of the saved series (window 2.5-7.5 s, t = k dt).
+    truth = {}
+    for key, r in rows.items():
+        s = sweep.load_series(out / "series" / f"{key}.npz")
+        assert len(s["t"]) == 15 and str(s["config_hash"]) == r["config_hash"]
+        w = (s["t"] >= 2.5) & (s["t"] <= 7.5)
+        assert float(r["value"]) == pytest.approx(np.mean(s["ospa"][w]), rel=1e-12)
+        assert float(r["ospa_median_window"]) == pytest.approx(np.median(s["ospa"][w]))
+        assert float(r["ospa_final"]) == s["ospa"][-1]
+        assert int(r["cardinality_est_final"]) == s["cardinality_est"][-1]
+        truth.setdefault(r["seed"], set()).add(tuple(s["cardinality_true"]))
+    # Common random numbers: every method and team size of a seed sees the same targets.
+    assert all(len(v) == 1 for v in truth.values())
+    assert len({next(iter(v)) for v in truth.values()}) == 2
+
+
+@pytest.mark.slow
+def test_rerun_skips_finished_trials_and_runs_only_missing_ones(tiny, tmp_path, children):
+    spec, first = tiny
+    out = tmp_path / "copy"
+    shutil.copytree(first, out)
+    before = (out / "results.csv").read_text()
+    res = _run(children, str(spec), "--workers", "2", "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    assert f"{TINY_TRIALS} done, 0 to run" in res.stdout
+    assert (out / "results.csv").read_text() == before
+
+    lines = before.splitlines(keepends=True)
+    kept = lines[:1] + lines[1:6]                       # header + 5 rows: 3 missing
+    (out / "results.csv").write_text("".join(kept))
+    res = _run(children, str(spec), "--workers", "2", "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    assert "5 done, 3 to run" in res.stdout
+    assert res.stderr.count("OSPA") == 3                # one line per trial (no TTY)
+    again = _rows(out / "results.csv")
+    assert len(again) == TINY_TRIALS
+    assert _without_timing(again) == _without_timing(_rows(first / "results.csv"))
+
+
+@pytest.mark.slow
+def test_results_do_not_depend_on_the_number_of_workers(tiny, tmp_path, children):
+    spec, two = tiny
+    one = tmp_path / "one_worker"
+    res = _run(children, str(spec), "--workers", "1", "--out", str(one))
+    assert res.returncode == 0, res.stderr
+    assert _without_timing(_rows(one / "results.csv")) == _without_timing(
+        _rows(two / "results.csv"))
+    for f in (two / "series").glob("*.npz"):
+        a, b = sweep.load_series(f), sweep.load_series(one / "series" / f.name)
+        assert a.keys() == b.keys()
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k])
+
+
+@pytest.mark.slow
+def test_changed_spec_is_refused_and_plot_only_redraws(tiny, tmp_path, capsys):
+    spec, first = tiny
+    out = tmp_path / "copy"
+    shutil.copytree(first, out)
+    changed = tmp_path / "tiny.yaml"
+    changed.write_text(TINY.replace("duration: 7.5", "duration: 8.0"))
+    assert sweep.main([str(changed), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "other settings" in err and "results.csv" in err
+
+    (out / "boxplot.png").unlink()
+    assert sweep.main([str(spec), "--out", str(out), "--plot-only"]) == 0
+    assert (out / "boxplot.png").exists()
+    assert sweep.main([str(spec), "--quick", "--out", str(tmp_path / "none"),
+                       "--plot-only"]) == 2
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_workers_and_keeps_finished_rows(tmp_path, children):
+    spec = tmp_path / "longer.yaml"
+    spec.write_text(TINY.replace("trials: 2\n", "trials: 12\n", 1)
+                    .replace("duration: 7.5", "duration: 15.0")
+                    .replace("window: [2.5, 7.5]", "window: [5.0, 15.0]"))
+    out = tmp_path / "out"
+    proc = children.start([SWEEP, str(spec), "--workers", "1", "--out", str(out)])
+    csv_path = out / "results.csv"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if csv_path.exists() and len(csv_path.read_text().splitlines()) >= 3:
+            break
+        time.sleep(0.1)
+    assert proc.poll() is None, "the sweep ended before it could be interrupted"
+    children.stop(proc, grace=20.0)
+    out_text, err = proc.communicate()
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    done = _rows(csv_path)
+    assert 2 <= len(done) < 48
+    res = _run(children, str(spec), "--workers", "2", "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    assert f"{len(done)} done, {48 - len(done)} to run" in res.stdout
+    assert len(_rows(csv_path)) == 48
+
+
+def test_progress_bar_on_a_tty_and_lines_otherwise():
+    spec = load_spec(find_spec("dames_static"), quick=True)
+    trials = spec.trials_list()[:3]
+    row = {"metric": "final", "value": 1.0, "ospa_final": 1.0, "wall_s": 2.0}
+    tty = io.StringIO()
+    p = sweep.Progress("x", trials, 1, tty, tty=True)
+    p.finished(trials[0], row, None)
+    p.close()
+    assert "\r" in tty.getvalue() and "2/4" in tty.getvalue() and "ETA" in tty.getvalue()
+    lines = io.StringIO()
+    p = sweep.Progress("x", trials, 0, lines, tty=False)
+    p.finished(trials[0], row, None)
+    p.finished(trials[1], None, "RuntimeError: boom")
+    assert "\r" not in lines.getvalue()
+    assert lines.getvalue().count("\n") == 2 and "failed: RuntimeError: boom" in lines.getvalue()
+
+
+def test_a_failing_trial_is_reported_not_raised():
+    trial = load_spec(find_spec("dames_static"), quick=True).trials_list()[0]
+    _, row, series, error, _ = sweep._work(dataclasses.replace(trial, controller="bogus"))
+    assert row is None and series is None
+    assert error.startswith("ValueError") and "bogus" in error
+
+
+# ------------------------------------------------------------------------------- specs
+@pytest.mark.parametrize("quick", [False, True])
+@pytest.mark.parametrize("name", ["dames_static", "dames_moving", "chen_clustered",
+                                  "chen_resolution"])
+def test_repository_specs_parse(name, quick):
+    spec = load_spec(find_spec(name), quick=quick)
+    trials = spec.trials_list()
+    assert len({t.key for t in trials}) == len(trials)
+    # Paired seeds: every cell runs the same seeds base_seed .. base_seed + trials - 1.
+    seeds = {t.seed for t in trials}
+    assert seeds == set(range(spec.base_seed, spec.base_seed + spec.trials))
+    assert spec.label == (f"{name}_quick" if quick else name)
+
+
+def test_full_specs_are_the_papers_experiments():
+    s = load_spec(find_spec("dames_static"))
+    assert s.robots == tuple(range(10, 101, 10)) and s.targets == (10, 30, 50)
+    assert s.methods == {"PHD": "phd", "uniform": "uniform"} and s.trials == 10
+    assert s.duration == 250.0 and s.metric == "final" and s.resolutions == (1.0,)
+    m = load_spec(find_spec("dames_moving"))
+    assert m.robots == tuple(range(10, 101, 10)) and m.targets == (10, 20, 30)
+    assert m.duration == 500.0 and m.metric == "mean" and m.window == (250.0, 500.0)
+    c = load_spec(find_spec("chen_clustered"))
+    assert c.robots == (60, 70, 80, 90) and c.trials == 10 and c.duration == 1000.0
+    assert c.methods == {"D": "phd", "P": "chen_p", "O": "chen_o"}
+    assert c.metric == "median" and c.window == (300.0, 1000.0)
+    r = load_spec(find_spec("chen_resolution"))
+    assert len(r.resolutions) >= 2 and r.methods == c.methods
+
+
+BAD = [
+    ("robotz: [1]\n", "robotz: unknown key"),
+    ("robots: ten\n", "robots: expected a list"),
+    ("robots: []\n", "robots: expected a non-empty list"),
+    ("robots: [2, two]\n", "robots[1]: expected an integer >= 1"),
+    ("trials: 1.5\n", "trials: expected an integer"),
+    ("preset: dames_fancy\n", "preset: unknown preset 'dames_fancy'"),
+    ("methods: {PHD: lloyd}\n", "methods.PHD: unknown controller 'lloyd'"),
+    ("methods: {}\n", "methods: expected at least one method"),
+    ("metric: max\n", "metric: expected one of"),
+    ("window: [20, 30]\n", "window: [20, 30] s holds no step"),
+    ("resolutions: [0.7]\n", "resolutions[0]:"),
+    ("scenario: {robots: 4}\n", "scenario.robots: set by the sweep"),
+    ("scenario: {robot_max_speed: fast}\n", "scenario: robot_max_speed: expected a number"),
+    ("quick: {robots: [0]}\n", "quick.robots[0]: expected an integer >= 1"),
+    ("quick: {preset: chen_clustered}\n", "quick.preset: unknown key"),
+]
+
+
+def _without_key(text: str, key: str) -> str:
+    """``text`` without the top-level ``key`` and its indented block."""
+    out, skipping = [], False
+    for ln in text.splitlines(keepends=True):
+        if not ln.startswith(" "):
+            skipping = ln.startswith(f"{key}:")
+        if not skipping:
+            out.append(ln)
+    return "".join(out)
+
+
+@pytest.mark.parametrize(("line", "message"), BAD, ids=[b[1].split(":")[0] for b in BAD])
+def test_bad_specs_name_the_file_and_the_key(tmp_path, line, message):
+    key = line.split(":")[0]
+    path = tmp_path / "bad.yaml"
+    path.write_text(_without_key(TINY, key) + line)
+    with pytest.raises(SpecError) as exc:
+        load_spec(path, quick=key == "quick")
+    assert str(exc.value).startswith(f"{path}: ")
+    assert message in str(exc.value)
+
+
+def test_bad_spec_exits_2_before_any_trial(tmp_path, capsys):
+    path = tmp_path / "bad.yaml"
+    path.write_text(TINY.replace("robots: [2, 3]", "robots: []"))
+    out = tmp_path / "out"
+    assert sweep.main([str(path), "--out", str(out)]) == 2
+    assert f"error: {path}: robots: expected a non-empty list" in capsys.readouterr().err
+    assert not out.exists()
+    assert sweep.main(["no_such_spec"]) == 2
+    assert "unknown sweep spec" in capsys.readouterr().err
+    path.write_text("preset: [unclosed\n")
+    assert sweep.main([str(path)]) == 2
+    assert "not valid YAML" in capsys.readouterr().err
+    path.write_text(TINY)
+    assert sweep.main([str(path), "--quick", "--dry-run", "--out", str(out)]) == 0
+    assert "2 trials" in capsys.readouterr().out
