@@ -404,7 +404,9 @@ def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out
         return failed, False
     series_dir, logs_dir = out / "series", out / "logs"
     series_dir.mkdir(parents=True, exist_ok=True)
-    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    # Both signals are set explicitly: a process started in the background by a
+    # non-interactive shell inherits SIGINT ignored, and Python keeps it so.
+    old = {sig: signal.signal(sig, _raise_interrupt) for sig in (signal.SIGINT, signal.SIGTERM)}
     pool = None
     try:
         pool = _pool(min(workers, len(todo)))
@@ -442,7 +444,8 @@ def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out
             pool.join()
         return failed, True
     finally:
-        signal.signal(signal.SIGTERM, old_term)
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
 
 
 def _cpu_seconds() -> float:

@@ -111,3 +111,29 @@ def test_a_killed_robot_does_not_stall_the_team(caplog):
     assert stats["orphan_bins"] <= orphaned
     assert engine.step_index == 50
     assert any("declared dead" in rec.message for rec in caplog.records)
+
+
+def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_over(
+        monkeypatch):
+    # Robot 8 dies after its state of step 30 reached the others (so it is in their
+    # partition) and before it sends its cell: the bins the partition gives it are dropped
+    # (their next owner re-initialises them) instead of failing the step.
+    import phd_swarm.sim.engine as engine_module
+
+    scenario = sc.dames_static(robots=12, targets=20).with_overrides(seed=0)
+    engine = InMemoryEngine(scenario, "phd", timeout_ticks=2)
+    engine.run(30)
+    victim, original = 8, engine_module.message_type
+
+    def kill_at_first_cell(env):
+        kind = original(env)
+        if kind == "CellPolygon" and victim not in engine.killed:
+            engine.kill(victim)
+        return kind
+
+    monkeypatch.setattr(engine_module, "message_type", kill_at_first_cell)
+    engine.step()
+    monkeypatch.setattr(engine_module, "message_type", original)
+    engine.run(3)
+    assert victim in engine.killed and engine.step_index == 34
+    assert _stats(engine).get("lost_to_dead", 0) > 0

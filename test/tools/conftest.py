@@ -13,15 +13,11 @@ ROOT = Path(__file__).resolve().parents[2]
 RECORDED = {"robots": 4, "targets": 10, "steps": 24, "seed": 5}
 
 
-@pytest.fixture(scope="session")
-def recorded_run(tmp_path_factory) -> Path:
-    """Directory of a finished ``run_swarm.sh`` run (run.mcap, summary.json, config.yaml)."""
+def record_swarm_run(out: Path, config: str, *options: str) -> Path:
+    """Run ``run_swarm.sh CONFIG OPTIONS`` into ``out/run`` on loopback; returns that dir."""
     from phd_swarm.testing import ChildProcesses
 
-    out = tmp_path_factory.mktemp("recorded")
-    argv = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / "dames_static.yaml"),
-            "--robots", str(RECORDED["robots"]), "--targets", str(RECORDED["targets"]),
-            "--duration", str(RECORDED["steps"] * 0.5), "--seed", str(RECORDED["seed"]),
+    argv = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / config), *options,
             "--out", str(out), "--name", "run", "--quiet"]
     with ChildProcesses() as children:
         proc = children.start(argv)
@@ -32,3 +28,18 @@ def recorded_run(tmp_path_factory) -> Path:
             raise
     assert proc.returncode == 0, f"run_swarm failed:\n{stdout}\n{stderr}"
     return out / "run"
+
+
+@pytest.fixture(scope="session")
+def record_swarm():
+    """:func:`record_swarm_run`, for modules' own recorded runs."""
+    return record_swarm_run
+
+
+@pytest.fixture(scope="session")
+def recorded_run(tmp_path_factory) -> Path:
+    """Directory of a finished ``run_swarm.sh`` run (run.mcap, summary.json, config.yaml)."""
+    return record_swarm_run(
+        tmp_path_factory.mktemp("recorded"), "dames_static.yaml",
+        "--robots", str(RECORDED["robots"]), "--targets", str(RECORDED["targets"]),
+        "--duration", str(RECORDED["steps"] * 0.5), "--seed", str(RECORDED["seed"]))

@@ -119,23 +119,11 @@ def test_bad_files_give_clear_errors(recorded_run, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def chen_run(tmp_path_factory) -> Path:
+def chen_run(tmp_path_factory, record_swarm) -> Path:
     """A short recorded run of Chen's O method (4 robots, 1 m grid, 12 steps)."""
-    from phd_swarm.testing import ChildProcesses
-
-    out = tmp_path_factory.mktemp("chen")
-    argv = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / "chen_clustered.yaml"),
-            "--robots", "4", "--duration", "6", "--seed", "2", "--controller", "chen_o",
-            "--out", str(out), "--name", "run", "--quiet"]
-    with ChildProcesses() as children:
-        proc = children.start(argv)
-        try:
-            stdout, stderr = proc.communicate(timeout=240)
-        except subprocess.TimeoutExpired:
-            children.stop(proc)
-            raise
-    assert proc.returncode == 0, f"run_swarm failed:\n{stdout}\n{stderr}"
-    return out / "run"
+    return record_swarm(tmp_path_factory.mktemp("chen"), "chen_clustered.yaml",
+                        "--robots", "4", "--duration", "6", "--seed", "2",
+                        "--controller", "chen_o")
 
 
 def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp_path):

@@ -44,7 +44,9 @@ Failures: every wait counts :meth:`tick` s (rounds without progress); after
 ``timeout_ticks`` the robots that did not answer are declared dead, dropped from every set,
 and the step goes on with what arrived. Bins that a robot owns but nobody handed to it (those
 of a dead robot) are re-initialised to the prior mass ``models.initial_density *
-bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``.
+bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``. Bins of the previous
+cell that the partition gives to a robot that died during the step (its state arrived, its
+cell did not) are dropped and counted in ``stats['lost_to_dead']``.
 """
 
 from __future__ import annotations
@@ -573,6 +575,16 @@ class RobotFilter:
             owner_rows = assign_bins(self.ctx.grid.centres_of(self.bins[idx]),
                                      cur.positions, cur.weights)
             owners = cur.ids[owner_rows]
+            lost = ~self._alive(owners)
+            if lost.any():
+                # The owner died after its state of this step arrived (it is in the
+                # partition) and before the hand-over: nobody can take these bins. Their
+                # next owner re-initialises them as orphans (see orphan_bins).
+                self.stats["lost_to_dead"] += int(lost.sum())
+                _log.warning("robot %d: %d bins of its previous cell belong to a robot that "
+                             "died during step %d; dropped", self.robot_id, int(lost.sum()),
+                             cur.step)
+                idx, owners = idx[~lost], owners[~lost]
             for dst in np.unique(owners):
                 dst = int(dst)
                 if dst == self.robot_id:
