@@ -211,15 +211,19 @@ def run_config_from_dict(doc: Any, where: str = "config") -> RunConfig:
     return RunConfig(scenario, shared, nodes, where)
 
 
-def load_run_config(path: str | Path) -> RunConfig:
-    """Read and validate a config file; errors name the file and the key."""
+def read_yaml(path: str | Path, what: str = "file") -> Any:
+    """Parse the YAML file ``path``; ValueError naming the file if unreadable or invalid."""
     path = Path(path)
     try:
         text = path.read_text()
     except OSError as exc:
-        raise ValueError(f"{path}: cannot read the config file: {exc.strerror}") from None
+        raise ValueError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
     try:
-        doc = yaml.safe_load(text)
+        return yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {exc}") from None
-    return run_config_from_dict(doc, str(path))
+
+
+def load_run_config(path: str | Path) -> RunConfig:
+    """Read and validate a config file; errors name the file and the key."""
+    return run_config_from_dict(read_yaml(path, "config file"), str(path))

@@ -41,8 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from phd_swarm.config import read_yaml
 from phd_swarm.core.controller import KINDS as CONTROLLER_KINDS
 from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 
@@ -412,13 +411,9 @@ def load_spec(path: str | Path, quick: bool = False) -> SweepSpec:
     path = Path(path)
     where = str(path)
     try:
-        text = path.read_text()
-    except OSError as exc:
-        raise SpecError(f"{where}: cannot read: {exc.strerror or exc}") from None
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise SpecError(f"{where}: not valid YAML: {exc}") from None
+        doc = read_yaml(path, "sweep spec")
+    except ValueError as exc:
+        raise SpecError(str(exc)) from None
     if doc is None:
         doc = {}
     _mapping(where, "", doc, TOP_KEYS)
