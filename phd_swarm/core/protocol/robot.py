@@ -46,7 +46,9 @@ and the step goes on with what arrived. Bins that a robot owns but nobody handed
 of a dead robot) are re-initialised to the prior mass ``models.initial_density *
 bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``. Bins of the previous
 cell that the partition gives to a robot that died during the step (its state arrived, its
-cell did not) are dropped and counted in ``stats['lost_to_dead']``.
+cell did not) are dropped and counted in ``stats['lost_to_dead']``; while the robots'
+dead sets differ, bins handed to a robot that does not own them are dropped and counted in
+``stats['misrouted_bins']`` (without any death that is a protocol error).
 """
 
 from __future__ import annotations
@@ -636,8 +638,20 @@ class RobotFilter:
             pos = np.searchsorted(owned, bins)
             ok = (pos < owned.size) & (owned[np.minimum(pos, owned.size - 1)] == bins)
             if not ok.all():
-                raise ProtocolError(f"robot {self.robot_id}: received {int((~ok).sum())} "
-                                    f"bins it does not own at step {cur.step}")
+                if not self.dead:
+                    raise ProtocolError(f"robot {self.robot_id}: received "
+                                        f"{int((~ok).sum())} bins it does not own at step "
+                                        f"{cur.step}")
+                # After a death the robots' dead sets can differ for a step, and with them
+                # their partitions: bins sent on another robot's view are dropped (their
+                # owner re-initialises them as orphans).
+                self.stats["misrouted_bins"] += int((~ok).sum())
+                _log.warning("robot %d: dropped %d bins handed to it that it does not own "
+                             "at step %d (the robots disagree on who is dead)",
+                             self.robot_id, int((~ok).sum()), cur.step)
+                pos, weights = pos[ok], np.asarray(weights)[ok]
+                a = None if a is None else np.asarray(a)[ok]
+                n = None if n is None else np.asarray(n)[ok]
             w[pos] = weights
             if cum and a is not None and n is not None:
                 alpha[pos] = a
