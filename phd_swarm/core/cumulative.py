@@ -21,7 +21,12 @@ its mode is ``(alpha - 1) / n``: the long-run fraction of observations of x that
 something, in [0, 1). Two modes are provided:
 
 - ``"rate"`` (default): ``(alpha - 1) / n`` for alpha >= 1 and n > 0, else 0;
-- ``"literal"``: ``(alpha - 1) * n`` for alpha >= 1, else 0 (eq. 11 as printed).
+- ``"literal"``: ``(alpha - 1) * n`` for alpha >= 1, else 0 (eq. 11 as printed);
+- ``"laplace"``: ``(alpha + 1) / (n + 2)``, Laplace's rule of succession: the posterior
+  mean of the probability that an observation of x finds something, under a uniform prior.
+  An unobserved bin weighs 1/2 instead of 0, so an idle robot (Alg. 1 line 13) is drawn to
+  unexplored space as well as to clusters, and away from space that was searched and found
+  empty. Not in the paper; see docs/decisions.md for why it exists.
 
 Power weights (Sec. 3.4, eq. 12-14): robot i's power cell uses ``||x - q_i||^2 - rho_i^2``
 with ``rho_i = (mass_i)^(-1/2)``, where mass_i is the sum of wc over its cell (eq. 13,
@@ -36,7 +41,7 @@ import numpy as np
 
 from .grid import Environment
 
-MODES = ("rate", "literal")
+MODES = ("rate", "literal", "laplace")
 
 
 @dataclass(frozen=True)
@@ -211,7 +216,8 @@ def cumulative_weight(alpha: np.ndarray, n: np.ndarray, mode: str = "rate") -> n
         ``"rate"``: ``(alpha - 1) / n`` if alpha >= 1 and n > 0, else 0; in [0, 1) when
         alpha <= n, which eq. 9-10 guarantee (one reward at most per observation).
         ``"literal"``: ``(alpha - 1) * n`` if alpha >= 1, else 0 (eq. 11 with beta = 1/n;
-        unbounded in n). See the module docstring for why ``"rate"`` is the default.
+        unbounded in n). ``"laplace"``: ``(alpha + 1) / (n + 2)`` (not eq. 11: the rule of
+        succession, 1/2 for an unobserved bin). See the module docstring.
 
     Returns
     -------
@@ -224,6 +230,8 @@ def cumulative_weight(alpha: np.ndarray, n: np.ndarray, mode: str = "rate") -> n
     excess = a - 1.0
     if mode == "literal":
         return np.where(a >= 1.0, excess * cnt, 0.0)
+    if mode == "laplace":
+        return (a + 1.0) / (cnt + 2.0)
     valid = (a >= 1.0) & (cnt > 0)
     # Dividing by max(n, 1) keeps the discarded branch of np.where free of 0-division.
     return np.where(valid, excess / np.maximum(cnt, 1), 0.0)

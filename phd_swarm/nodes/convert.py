@@ -150,7 +150,9 @@ def to_ros(msg: Message, dt: float, frame_id: str):
                                 weights=f64(msg.weights),
                                 alpha=f64(msg.alpha) if cum else array.array("d"),
                                 observation_count=f64(msg.count) if cum
-                                else array.array("d"))
+                                else array.array("d"),
+                                radius_ids=u32(msg.radius_ids),
+                                cell_radii=f64(msg.cell_radii))
     raise TypeError(f"not a protocol message: {type(msg).__name__}")
 
 
@@ -212,8 +214,14 @@ def from_ros(msg, grid: Grid, max_measurements: int) -> Message:
                                      f"{len(count)} observation counts")
             if np.any(alpha < 0) or np.any(count < 0):
                 raise InvalidMessage("alpha / observation_count: negative value")
+        radius_ids = tuple(int(i) for i in msg.radius_ids)
+        radii = values(msg.cell_radii, "cell_radii")
+        if len(radii) != len(radius_ids):
+            raise InvalidMessage(f"{len(radius_ids)} radius ids but {len(radii)} cell radii")
+        if np.any(radii < 0):
+            raise InvalidMessage("cell_radii: negative radius")
         return TransferMsg(msg.from_id, msg.to_id, msg.step, TransferKind(msg.kind), bins, w,
-                           alpha, count)
+                           alpha, count, radius_ids, radii)
     raise InvalidMessage(f"not a protocol message: {type(msg).__name__}")
 
 

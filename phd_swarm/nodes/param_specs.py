@@ -87,8 +87,9 @@ ROBOT = (
               choices=("phd", "uniform", "chen_p", "chen_o")),
     ParamSpec("rho_max", 0.0, "Cap on the power weight rho for chen_* [m]; 0 uses the "
               "sensing radius (docs/decisions.md).", low=0.0, high=1e6),
-    ParamSpec("cumulative_mode", "rate", "Chen eq. 11: rate (default) or literal reading "
-              "(docs/decisions.md).", choices=("rate", "literal")),
+    ParamSpec("cumulative_mode", "rate", "Chen eq. 11: rate (default) or literal reading, "
+              "or laplace: the rule of succession (docs/decisions.md).",
+              choices=("rate", "literal", "laplace")),
     ParamSpec("tick_period", 1.0, "Wall seconds without any protocol message after which "
               "one timeout round passes [s].", low=0.01, high=600.0),
     ParamSpec("timeout_ticks", 5, "Rounds without an answer before a silent peer is "

@@ -23,7 +23,7 @@ from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
-from phd_swarm.sim.targets import substeps_per_step
+from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
 Box = tuple[float, float, float, float]
 
@@ -101,6 +101,11 @@ class TargetConfig:
     birth : bool
         ``dames_walk``: draw births from the filter's birth PHD ``models.birth`` (Dames
         eq. 14, "the birth model matched the true statistics of the targets").
+    birth_heading : {"inward", "uniform"}
+        ``dames_walk``: a newborn's heading, uniform over the half-plane facing the centre
+        of E (default: the paper's newborns "entered the environment and moved towards the
+        center", Sec. IV-B) or uniform over all directions (then about half leave at once);
+        docs/decisions.md.
     clusters : tuple of boxes
         ``clustered_walk``: the sub-regions [m] (Chen: 33 x 33 m at the lower-left and
         upper-right corners).
@@ -121,6 +126,7 @@ class TargetConfig:
     heading_sd: float = 0.1
     heading_rate: float = 10.0
     birth: bool = False
+    birth_heading: str = "inward"
     clusters: tuple[Box, ...] = ()
     per_cluster: tuple[int, ...] = ()
     step_sd: float = 1.0
@@ -140,6 +146,9 @@ class TargetConfig:
         _real("targets.heading_rate", self.heading_rate, strict=True)
         if not isinstance(self.birth, bool):
             raise ValueError(f"targets.birth must be true or false, got {self.birth!r}")
+        if self.birth_heading not in BIRTH_HEADINGS:
+            raise ValueError(f"targets.birth_heading must be one of {list(BIRTH_HEADINGS)}, "
+                             f"got {self.birth_heading!r}")
         _real("targets.step_sd", self.step_sd)
         _real("targets.max_speed", self.max_speed)
         if isinstance(self.clusters, (str, bytes)) or not isinstance(self.clusters, Sequence):
@@ -392,6 +401,7 @@ def _p_mapping(value: Any, path: str, allowed: Sequence[str]) -> Mapping[str, An
 _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "kind": _p_str, "count": _p_int, "draw_box": _p_box, "speed": _p_number,
     "heading_sd": _p_number, "heading_rate": _p_number, "birth": _p_bool,
+    "birth_heading": _p_str,
     "clusters": _p_boxes, "per_cluster": _p_ints, "step_sd": _p_number,
     "max_speed": _p_number}
 

@@ -33,6 +33,10 @@ if TYPE_CHECKING:
 Box = tuple[float, float, float, float]
 
 
+#: How a newborn of :class:`DamesWalkers` is headed (see :meth:`DamesWalkers.step`).
+BIRTH_HEADINGS = ("uniform", "inward")
+
+
 def _frozen(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
     return a
@@ -230,7 +234,8 @@ class DamesWalkers:
 
     def __init__(self, env: Environment, positions: np.ndarray, headings: np.ndarray,
                  speed: float = 1.0, heading_sd: float = 0.1, heading_rate: float = 10.0,
-                 birth: BoundaryBirth | None = None) -> None:
+                 birth: BoundaryBirth | None = None,
+                 birth_heading: str = "uniform") -> None:
         p = np.array(positions, dtype=float).reshape(-1, 2)
         h = np.array(headings, dtype=float).reshape(-1)
         if h.shape != (len(p),):
@@ -242,6 +247,10 @@ class DamesWalkers:
         self.heading_sd = _check_nonneg("heading_sd", heading_sd)
         self.heading_rate = _check_nonneg("heading_rate", heading_rate, positive=True)
         self.birth = birth
+        if birth_heading not in BIRTH_HEADINGS:
+            raise ValueError(f"birth_heading must be one of {BIRTH_HEADINGS}, "
+                             f"got {birth_heading!r}")
+        self.birth_heading = birth_heading
         self._positions = _frozen(p)
         self._headings = _frozen(h)
         self._ids = _frozen(np.arange(len(p), dtype=np.int64))
@@ -250,7 +259,8 @@ class DamesWalkers:
     @classmethod
     def sample(cls, rng: np.random.Generator, env: Environment, count: int,
                speed: float = 1.0, heading_sd: float = 0.1, heading_rate: float = 10.0,
-               birth: BoundaryBirth | None = None) -> DamesWalkers:
+               birth: BoundaryBirth | None = None,
+               birth_heading: str = "uniform") -> DamesWalkers:
         """Initial population: ``count`` targets uniform in E, headings uniform in [0, 2 pi).
 
         The paper gives the initial number of targets (10, 20 or 30) but not how they are
@@ -263,7 +273,7 @@ class DamesWalkers:
         lo = np.array([env.xmin, env.ymin])
         p = lo + rng.random((n, 2)) * np.array([env.width, env.height])
         h = 2.0 * np.pi * rng.random(n)
-        return cls(env, p, h, speed, heading_sd, heading_rate, birth)
+        return cls(env, p, h, speed, heading_sd, heading_rate, birth, birth_heading)
 
     @property
     def positions(self) -> np.ndarray:
@@ -297,7 +307,9 @@ class DamesWalkers:
            ``S = dt * heading_rate`` sub-steps (row = target in id order);
         2. ``rng.poisson(lambda)``: the number of births B (skipped when lambda = 0);
         3. ``rng.random((B, 3))``: birth positions (:func:`sample_boundary_ring`);
-        4. ``rng.random(B)``: birth headings, times 2 pi.
+        4. ``rng.random(B)``: birth headings: u times 2 pi (``birth_heading="uniform"``), or
+           the direction to the centre of E plus (u - 1/2) pi (``"inward"``: uniform over
+           the half-plane of headings facing the centre).
         """
         s = substeps_per_step(dt, self.heading_rate)
         n = len(self._positions)
@@ -315,7 +327,13 @@ class DamesWalkers:
         if lam > 0.0:
             b = int(rng.poisson(lam))
             born_p = sample_boundary_ring(rng.random((b, 3)), self.env, self.birth.margin)
-            born_h = 2.0 * np.pi * rng.random(b)
+            u = rng.random(b)
+            if self.birth_heading == "inward":
+                to_centre = np.array([self.env.xmin + 0.5 * self.env.width,
+                                      self.env.ymin + 0.5 * self.env.height]) - born_p
+                born_h = np.arctan2(to_centre[:, 1], to_centre[:, 0]) + np.pi * (u - 0.5)
+            else:
+                born_h = 2.0 * np.pi * u
             positions = np.concatenate([positions, born_p])
             last_heading = np.concatenate([last_heading, born_h])
             ids = np.concatenate([ids, self._next_id + np.arange(b, dtype=np.int64)])
@@ -455,7 +473,8 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     if cfg.kind == "dames_walk":
         return DamesWalkers.sample(rng, scenario.env, cfg.count, cfg.speed, cfg.heading_sd,
                                    cfg.heading_rate,
-                                   scenario.models.birth if cfg.birth else None)
+                                   scenario.models.birth if cfg.birth else None,
+                                   cfg.birth_heading)
     if cfg.kind == "clustered_walk":
         return ClusteredWalkers.sample(rng, cfg.clusters, cfg.per_cluster, cfg.step_sd,
                                        cfg.max_speed)

@@ -128,6 +128,8 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "targets.heading_rate": "dames_walk: heading updates per second [Hz]; dt x "
                             "heading_rate must be whole.",
     "targets.birth": "dames_walk: draw births from the filter's birth PHD (`models.birth`).",
+    "targets.birth_heading": "dames_walk: a newborn's heading, `inward` (uniform over the "
+                             "half-plane facing the map centre) or `uniform` (any direction).",
     "targets.clusters": "clustered_walk: the cluster boxes, four numbers (xmin, ymin, xmax, "
                         "ymax) [m] each, flattened into one list.",
     "targets.per_cluster": "clustered_walk: targets in each cluster.",

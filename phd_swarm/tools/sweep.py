@@ -55,14 +55,28 @@ from typing import IO, Any
 
 import numpy as np
 
-from phd_swarm.tools.sweep_spec import SpecError, SweepSpec, Trial, find_spec, load_spec
+from phd_swarm.tools.sweep_spec import (
+    SpecError,
+    SweepSpec,
+    Trial,
+    controller_config,
+    find_spec,
+    load_spec,
+)
 
 #: Columns of results.csv, in order.
 COLUMNS = ("spec", "trial", "method", "controller", "robots", "targets", "resolution",
            "seed", "trial_index", "steps", "duration_s", "metric", "value", "ospa_final",
            "ospa_mean_window", "ospa_median_window", "window_start_s", "window_end_s",
            "cardinality_true_final", "cardinality_est_final", "expected_cardinality_final",
-           "cardinality_true_mean_window", "wall_s", "cpu_s", "config_hash")
+           "cardinality_true_mean_window", "cell_mismatch", "misrouted_bins",
+           "unroutable_bins", "duplicate_bins", "orphan_bins", "wall_s", "cpu_s",
+           "config_hash")
+
+#: Robot protocol counters summed over the team into results.csv (see
+#: :mod:`phd_swarm.core.protocol.robot`): a missed neighbour and what it cost.
+PROTOCOL_COLUMNS = ("cell_mismatch", "misrouted_bins", "unroutable_bins", "duplicate_bins",
+                    "orphan_bins")
 
 #: Columns that differ between two runs of the same trial (timings).
 TIMING_COLUMNS = ("wall_s", "cpu_s")
@@ -76,7 +90,7 @@ THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")
 
 _INT_COLUMNS = ("robots", "targets", "seed", "trial_index", "steps",
-                "cardinality_true_final", "cardinality_est_final")
+                "cardinality_true_final", "cardinality_est_final", *PROTOCOL_COLUMNS)
 _FLOAT_COLUMNS = ("resolution", "duration_s", "value", "ospa_final", "ospa_mean_window",
                   "ospa_median_window", "window_start_s", "window_end_s",
                   "expected_cardinality_final", "cardinality_true_mean_window", "wall_s",
@@ -99,7 +113,7 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     sc = trial.scenario
-    engine = InMemoryEngine(sc, trial.controller)
+    engine = InMemoryEngine(sc, controller_config(trial.controller, sc))
     n = sc.steps
     s = {name: np.zeros(n) for name in SERIES}
     for k in range(n):
@@ -126,6 +140,8 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
            "cardinality_est_final": int(s["cardinality_est"][-1]),
            "expected_cardinality_final": float(s["expected_cardinality"][-1]),
            "cardinality_true_mean_window": float(np.mean(s["cardinality_true"][in_window])),
+           **{c: sum(r.stats.get(c, 0) for r in engine.robots.values())
+              for c in PROTOCOL_COLUMNS},
            "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0,
            "config_hash": trial.config_hash}
     return row, s

@@ -43,6 +43,8 @@ from typing import Any
 
 from phd_swarm.config import read_yaml
 from phd_swarm.core.controller import KINDS as CONTROLLER_KINDS
+from phd_swarm.core.controller import ControllerConfig
+from phd_swarm.core.cumulative import MODES as CUMULATIVE_MODES
 from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 
 #: Ways to reduce a trial's per-step OSPA series to one number.
@@ -60,6 +62,10 @@ AXIS_FIELDS = ("preset", "robots", "seed", "resolution", "duration")
 
 _LABEL = re.compile(r"^[A-Za-z0-9_]+$")
 
+#: Controller options a method may set (``{kind: chen_o, cumulative_mode: laplace}``), with
+#: their allowed values.
+CONTROLLER_OPTIONS: dict[str, tuple[str, ...]] = {"cumulative_mode": CUMULATIVE_MODES}
+
 
 class SpecError(ValueError):
     """A sweep spec is malformed; the message names the file and the key."""
@@ -74,7 +80,8 @@ class Trial:
     method : str
         The spec's label of the method (e.g. ``PHD``, ``D``).
     controller : str
-        Controller kind (:data:`phd_swarm.core.controller.KINDS`).
+        Controller kind (:data:`phd_swarm.core.controller.KINDS`), with its options if any
+        (:func:`controller_name`).
     robots, targets : int
         Team size and number of targets drawn (static) or initial (moving) or in total
         (clustered).
@@ -338,14 +345,46 @@ def _methods(where: str, key: str, value: Any) -> dict[str, str]:
         raise _fail(where, key, "expected at least one method (label: controller kind)")
     out = {}
     for label, kind in m.items():
+        name = f"{key}.{label}"
         if not isinstance(label, str) or not _LABEL.match(label):
-            raise _fail(where, f"{key}.{label}", "a method label must be letters, digits "
-                                                 "and underscores")
+            raise _fail(where, name, "a method label must be letters, digits and underscores")
+        options: dict[str, str] = {}
+        if isinstance(kind, Mapping):
+            opts = dict(_mapping(where, name, kind, ("kind", *CONTROLLER_OPTIONS)))
+            if "kind" not in opts:
+                raise _fail(where, f"{name}.kind", "missing; expected a controller kind")
+            kind = opts.pop("kind")
+            for opt, v in opts.items():
+                if v not in CONTROLLER_OPTIONS[opt]:
+                    raise _fail(where, f"{name}.{opt}", f"{v!r} is not one of "
+                                                        f"{list(CONTROLLER_OPTIONS[opt])}")
+                options[opt] = v
         if kind not in CONTROLLER_KINDS:
-            raise _fail(where, f"{key}.{label}", f"unknown controller {kind!r}; expected one "
-                                                 f"of {list(CONTROLLER_KINDS)}")
-        out[label] = kind
+            raise _fail(where, name, f"unknown controller {kind!r}; expected one "
+                                     f"of {list(CONTROLLER_KINDS)}")
+        out[label] = controller_name(kind, options)
     return out
+
+
+def controller_name(kind: str, options: Mapping[str, str] | None = None) -> str:
+    """Canonical text of a controller with options: ``kind`` or ``kind(key=value,...)``.
+
+    This is the ``controller`` column of results.csv and what the config hash covers; a
+    controller without options hashes as its kind alone.
+    """
+    if not options:
+        return kind
+    return f"{kind}({','.join(f'{k}={options[k]}' for k in sorted(options))})"
+
+
+def controller_config(controller: str, scenario: Scenario) -> ControllerConfig:
+    """The :class:`ControllerConfig` of a canonical controller text (:func:`controller_name`).
+
+    ``rho_max`` is the scenario's sensing radius, as the engine uses for a bare kind.
+    """
+    kind, _, rest = controller.partition("(")
+    options = dict(item.split("=", 1) for item in rest.rstrip(")").split(",")) if rest else {}
+    return ControllerConfig(kind=kind, rho_max=scenario.models.detection.radius, **options)
 
 
 def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:

@@ -74,6 +74,19 @@ def test_alpha_below_one_gives_zero(mode: str) -> None:
     assert wc[4] == pytest.approx(0.25 if mode == "rate" else 4.0)
 
 
+def test_laplace_is_the_rule_of_succession() -> None:
+    # Unobserved: 1/2; rewards 1, 0, 1: (2 + 1) / (3 + 2); ten empty scans: 1/12.
+    alpha, n = cumulative_init(1)
+    assert cumulative_weight(alpha, n, "laplace")[0] == 0.5
+    alpha, n = observe([True, False, True])
+    assert cumulative_weight(alpha, n, "laplace")[0] == pytest.approx(3.0 / 5.0)
+    alpha, n = observe([False] * 10)
+    assert cumulative_weight(alpha, n, "laplace")[0] == pytest.approx(1.0 / 12.0)
+    # Unexplored space ranks between searched-and-empty and always-rewarding space.
+    alpha, n = observe([True] * 10)
+    assert 1.0 / 12.0 < 0.5 < cumulative_weight(alpha, n, "laplace")[0] < 1.0
+
+
 def test_only_empty_scans_give_zero() -> None:
     alpha, n = observe([False] * 10)
     assert alpha[0] == 0.0 and n[0] == 10

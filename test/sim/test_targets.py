@@ -9,6 +9,7 @@ from phd_swarm.core.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
 from phd_swarm.sim.scenario import chen_clustered, dames_moving, dames_static
 from phd_swarm.sim.targets import (
+    BIRTH_HEADINGS,
     ClusteredWalkers,
     DamesWalkers,
     StaticTargets,
@@ -144,6 +145,56 @@ def test_birth_rate_and_positions_match_the_birth_phd():
     assert len(z) > 1500
     assert np.all(E.contains(z))
     assert np.all(E.distance_to_boundary(z) <= 5.0)
+
+
+def _newborns(heading: str, steps: int = 4000) -> tuple[np.ndarray, np.ndarray]:
+    """Positions and headings of the targets born in ``steps`` steps (no initial ones)."""
+    w = DamesWalkers(E, np.empty((0, 2)), np.empty(0), heading_sd=0.0, birth=DAMES_BIRTH,
+                     birth_heading=heading)
+    rng = np.random.default_rng(3)
+    pos, head = [], []
+    for _ in range(steps):
+        before = w.ids.max(initial=-1)
+        w.step(rng, 0.5)
+        new = w.ids > before
+        pos.append(w.positions[new])
+        head.append(w.headings[new])
+    return np.concatenate(pos), np.concatenate(head)
+
+
+def test_inward_births_head_into_the_map_and_uniform_ones_anywhere():
+    centre = np.array([50.0, 50.0])
+    for heading, facing in (("inward", (1.0, 1.0)), ("uniform", (0.4, 0.6))):
+        p, h = _newborns(heading)
+        assert len(p) > 300
+        to_centre = centre - p
+        cos = (np.cos(h) * to_centre[:, 0] + np.sin(h) * to_centre[:, 1]) / np.hypot(
+            to_centre[:, 0], to_centre[:, 1])
+        assert facing[0] <= np.mean(cos >= 0.0) <= facing[1], heading
+    # The same draws place the first newborns (later the populations, and with them the
+    # number of heading draws, differ).
+    np.testing.assert_array_equal(_newborns("inward", 40)[0][:1],
+                                  _newborns("uniform", 40)[0][:1])
+    # Inward births live longer, so the population settles higher (Dames: "around 35").
+    # ~9 against ~17 targets (4 runs of 1500 s, the last 1000 s; one run varies by +-4).
+    counts = {}
+    for heading in BIRTH_HEADINGS:
+        n = []
+        for seed in range(4):
+            w = DamesWalkers.sample(np.random.default_rng(seed), E, 20, birth=DAMES_BIRTH,
+                                    birth_heading=heading)
+            rng = np.random.default_rng(seed + 10)
+            for k in range(3000):
+                w.step(rng, 0.5)
+                if k >= 1000:
+                    n.append(len(w.ids))
+        counts[heading] = np.mean(n)
+    assert counts["inward"] > 1.4 * counts["uniform"], counts
+
+
+def test_unknown_birth_heading_is_refused():
+    with pytest.raises(ValueError, match="birth_heading must be one of"):
+        DamesWalkers(E, np.empty((0, 2)), np.empty(0), birth_heading="north")
 
 
 def test_ids_increase_and_are_never_reused():

@@ -240,10 +240,11 @@ def test_full_specs_are_the_papers_experiments():
     assert m.duration == 500.0 and m.metric == "mean" and m.window == (250.0, 500.0)
     c = load_spec(find_spec("chen_clustered"))
     assert c.robots == (60, 70, 80, 90) and c.trials == 10 and c.duration == 1000.0
-    assert c.methods == {"D": "phd", "P": "chen_p", "O": "chen_o"}
+    assert c.methods == {"D": "phd", "P": "chen_p", "O": "chen_o",
+                         "O_laplace": "chen_o(cumulative_mode=laplace)"}
     assert c.metric == "median" and c.window == (300.0, 1000.0)
     r = load_spec(find_spec("chen_resolution"))
-    assert len(r.resolutions) >= 2 and r.methods == c.methods
+    assert len(r.resolutions) >= 2 and r.methods == {"D": "phd", "P": "chen_p", "O": "chen_o"}
 
 
 BAD = [
@@ -255,6 +256,10 @@ BAD = [
     ("preset: dames_fancy\n", "preset: unknown preset 'dames_fancy'"),
     ("methods: {PHD: lloyd}\n", "methods.PHD: unknown controller 'lloyd'"),
     ("methods: {}\n", "methods: expected at least one method"),
+    ("methods: {O: {kind: chen_o, cumulative_mode: fancy}}\n",
+     "methods.O.cumulative_mode: 'fancy' is not one of"),
+    ("methods: {O: {cumulative_mode: rate}}\n", "methods.O.kind: missing"),
+    ("methods: {O: {kind: chen_o, rho: 3}}\n", "methods.O.rho: unknown key"),
     ("metric: max\n", "metric: expected one of"),
     ("window: [20, 30]\n", "window: [20, 30] s holds no step"),
     ("resolutions: [0.7]\n", "resolutions[0]:"),
@@ -285,6 +290,26 @@ def test_bad_specs_name_the_file_and_the_key(tmp_path, line, message):
         load_spec(path, quick=key == "quick")
     assert str(exc.value).startswith(f"{path}: ")
     assert message in str(exc.value)
+
+
+def test_a_method_with_controller_options_runs_with_them(tmp_path):
+    path = tmp_path / "options.yaml"
+    path.write_text(TINY.replace("methods: {PHD: phd, uniform: uniform}",
+                                 "methods: {O: chen_o, OL: {kind: chen_o, "
+                                 "cumulative_mode: laplace}}"))
+    spec = load_spec(path, quick=True)
+    assert spec.methods == {"O": "chen_o", "OL": "chen_o(cumulative_mode=laplace)"}
+    o, ol = spec.trials_list()
+    assert o.config_hash != ol.config_hash
+    from phd_swarm.tools.sweep_spec import controller_config
+
+    config = controller_config(ol.controller, ol.scenario)
+    assert (config.kind, config.cumulative_mode) == ("chen_o", "laplace")
+    assert config.rho_max == ol.scenario.models.detection.radius
+    assert controller_config(o.controller, o.scenario).cumulative_mode == "rate"
+    row, series = sweep.run_trial(ol)
+    assert row["controller"] == "chen_o(cumulative_mode=laplace)" and len(series["t"]) == 15
+    assert all(row[c] == 0 for c in sweep.PROTOCOL_COLUMNS)
 
 
 def test_bad_spec_exits_2_before_any_trial(tmp_path, capsys):

@@ -116,6 +116,9 @@ class TransferMsg:
 
     ``alpha`` and ``count`` (Chen's cumulative state, count = n = 1/beta) travel with the
     bins on an ownership hand-over when the cumulative density is on; else they are None.
+    An ownership hand-over also relays the radii of this step's cells of the sender's
+    contacts (``radius_ids``, ``cell_radii`` [m], computed from the cells it received), from
+    which the receivers choose the next step's contacts with radii one step old, not two.
     """
 
     from_id: int
@@ -126,12 +129,15 @@ class TransferMsg:
     weights: np.ndarray
     alpha: np.ndarray | None = None
     count: np.ndarray | None = None
+    radius_ids: tuple[int, ...] = ()
+    cell_radii: np.ndarray = field(default_factory=lambda: np.empty(0))
 
     def wire_size(self) -> int:
         """Estimated CDR payload size [bytes]."""
         n = len(self.bins)
         extra = 0 if self.alpha is None else 16 * n
-        return _HEADER + 12 + 1 + 4 + 4 * n + 4 + 8 * n + 8 + extra
+        return (_HEADER + 12 + 1 + 4 + 4 * n + 4 + 8 * n + 8 + extra + 8
+                + 12 * len(self.radius_ids))
 
 
 Message = StateMsg | CellMsg | ScanMsg | EtaPartialMsg | EtaTotalMsg | TransferMsg
