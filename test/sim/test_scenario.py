@@ -160,3 +160,14 @@ def test_scenario_is_hashable_and_comparable():
     assert dames_static() == dames_static()
     assert hash(dames_static()) == hash(dames_static())
     assert isinstance(dames_static(), Scenario)
+
+
+def test_birth_heading_is_read_from_the_config_and_checked():
+    from phd_swarm.sim.scenario import dames_moving, scenario_from_dict
+
+    assert dames_moving().targets.birth_heading == "inward"
+    sc = scenario_from_dict({"preset": "dames_moving",
+                             "targets": {"birth_heading": "uniform"}})
+    assert sc.targets.birth_heading == "uniform"
+    with pytest.raises(ValueError, match="targets.birth_heading must be one of"):
+        scenario_from_dict({"preset": "dames_moving", "targets": {"birth_heading": "north"}})

@@ -664,10 +664,8 @@ class RobotFilter:
                 # contact set (docs/protocol.md) changes a partition. Bins sent on another
                 # robot's view are dropped (their owner re-initialises them as orphans).
                 self._misrouted(int((~ok).sum()), "bins", cur.step)
-                pos, weights = pos[ok], np.asarray(weights)[ok]
-                a = None if a is None else np.asarray(a)[ok]
-                n = None if n is None else np.asarray(n)[ok]
-            seen = ~np.isnan(w[pos])
+            seen = np.zeros(bins.size, dtype=bool)
+            seen[ok] = ~np.isnan(w[pos[ok]])
             if seen.any():
                 # Two robots held the bin (both owned it in disagreeing partitions of the
                 # previous step): the own copy wins, then the lowest sender id.
@@ -675,9 +673,11 @@ class RobotFilter:
                 _log.warning("robot %d: %d bins handed to it at step %d were already held; "
                              "the first copy is kept", self.robot_id, int(seen.sum()),
                              cur.step)
-                pos, weights = pos[~seen], np.asarray(weights)[~seen]
-                a = None if a is None else np.asarray(a)[~seen]
-                n = None if n is None else np.asarray(n)[~seen]
+            keep = ok & ~seen
+            if not keep.all():
+                pos, weights = pos[keep], np.asarray(weights)[keep]
+                a = None if a is None else np.asarray(a)[keep]
+                n = None if n is None else np.asarray(n)[keep]
             w[pos] = weights
             if cum and a is not None and n is not None:
                 alpha[pos] = a
@@ -686,7 +686,8 @@ class RobotFilter:
         if orphans.any():
             self.stats["orphan_bins"] += int(orphans.sum())
             _log.warning("robot %d: %d bins it now owns were handed over by nobody (a dead "
-                         "owner) at step %d; re-initialised to the prior mass %.3g",
+                         "owner or a missed neighbour) at step %d; re-initialised to the "
+                         "prior mass %.3g",
                          self.robot_id, int(orphans.sum()), cur.step, self.ctx.prior_mass)
             w[orphans] = self.ctx.prior_mass
         self.bins, self.weights, self.alpha, self.count = owned, w, alpha, count
