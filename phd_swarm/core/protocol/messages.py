@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -143,13 +144,19 @@ class TransferMsg:
 Message = StateMsg | CellMsg | ScanMsg | EtaPartialMsg | EtaTotalMsg | TransferMsg
 
 
-@dataclass(frozen=True, eq=False)
-class Envelope:
-    """A message addressed to robot ``dst`` by robot ``src``."""
+class Envelope(NamedTuple):
+    """A message addressed to robot ``dst`` by robot ``src``.
+
+    A named tuple, not a dataclass: the engine creates ~10^4 per step, and a tuple is
+    several times cheaper to build.
+    """
 
     src: int
     dst: int
-    msg: Message = field(repr=False)
+    msg: Message
+
+    def __repr__(self) -> str:
+        return f"Envelope(src={self.src}, dst={self.dst}, msg={type(self.msg).__name__})"
 
 
 def sender_of(msg: Message) -> int:

@@ -94,7 +94,6 @@ from .messages import (
     StateMsg,
     TransferKind,
     TransferMsg,
-    sender_of,
 )
 
 _log = logging.getLogger("phd_swarm.protocol")
@@ -431,11 +430,11 @@ class RobotFilter:
                                       and self.phase == Phase.DONE):
             self.stats["dropped"] += 1
             return
-        src = sender_of(msg)
+        src, key = _mail_route(msg)
         if src in self.dead or src == self.robot_id:
             self.stats["dropped"] += 1
             return
-        self._mail[_mail_key(msg)][src] = msg
+        self._mail[key][src] = msg
 
     def advance(self) -> list[Envelope]:
         """Make as much progress as the buffered messages allow; returns what to send."""
@@ -573,15 +572,15 @@ class RobotFilter:
         """Alg. 1 lines 4-7: bins of the previous cell that a neighbour now owns go to it."""
         cur = self._cur
         assert cur is not None
-        radius_ids, radii = [], []
-        for src, msg in self._mail[(cur.step, "cell")].items():
-            vertices = np.asarray(msg.vertices).reshape(-1, 2)
-            cur.cells[src] = (vertices, tuple(msg.neighbour_ids))
-            radius_ids.append(src)
-            radii.append(_cell_radius(np.asarray(msg.generator, dtype=float), vertices))
-        order = np.argsort(np.asarray(radius_ids, dtype=np.int64), kind="stable")
-        relay_ids = tuple(int(radius_ids[i]) for i in order)
-        relay_radii = np.asarray(radii, dtype=float)[order].reshape(-1)
+        cells = self._mail[(cur.step, "cell")]
+        for src, msg in cells.items():
+            cur.cells[src] = (np.asarray(msg.vertices).reshape(-1, 2), tuple(msg.neighbour_ids))
+        radius_ids = np.fromiter(cells, dtype=np.int64, count=len(cells))
+        radii = _cell_radii([np.asarray(m.generator, dtype=float) for m in cells.values()],
+                            [cur.cells[src][0] for src in cells])
+        order = np.argsort(radius_ids, kind="stable")
+        relay_ids = tuple(radius_ids[order].tolist())
+        relay_radii = radii[order]
         cur.fresh_ids = np.asarray(relay_ids, dtype=np.int64)
         cur.fresh_radii = relay_radii
         cur.cell_ids, cur.cell_lo, cur.cell_hi = _bounding_boxes(cur.cells)
@@ -978,6 +977,16 @@ class RobotFilter:
         extra = ~_isin_sorted(known.ids, cur.ids)
         if not extra.any() or len(cur.cell) == 0:
             return
+        # Robot k's half-plane is (x - q) . u_k <= h_k (partition.cells); it cannot cut a
+        # cell whose vertices all lie within h_k of q. Most extra robots are far: skip the
+        # recomputation when none of them can cut.
+        d2 = ((known.positions[extra] - cur.position) ** 2).sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = (d2 + cur.power_weight ** 2 - known.power_weights[extra] ** 2) \
+                / (2.0 * np.sqrt(d2))
+        reach = _cell_radius(cur.position, cur.cell)
+        if np.all(h > reach * (1.0 + 1e-9) + 1e-9):
+            return
         ids = np.concatenate([cur.ids, known.ids[extra]])
         order = np.argsort(ids, kind="stable")
         ids = ids[order]
@@ -1069,28 +1078,25 @@ class RobotFilter:
             del self._mail[key]
 
 
-#: Mail kinds of the messages whose key is (step, kind), by exact type.
-_PLAIN_MAIL = {StateMsg: "state", CellMsg: "cell", ScanMsg: "scan"}
+def _mail_route(msg: Message) -> tuple[int, tuple]:
+    """Sender of ``msg`` and the key of the mailbox it goes to: (step, kind[, active id])."""
+    route = _ROUTES.get(type(msg))
+    if route is None:
+        raise TypeError(f"not a protocol message: {type(msg).__name__}")
+    return route(msg)
 
 
-def _mail_key(msg: Message) -> tuple:
-    kind = _PLAIN_MAIL.get(type(msg))
-    if kind is not None:
-        return (msg.step, kind)
-    if isinstance(msg, TransferMsg):
-        kind = "own" if msg.kind == TransferKind.OWNERSHIP else "phantom"
-        return (msg.step, kind)
-    if isinstance(msg, EtaPartialMsg):
-        return (msg.step, "partial", msg.active_id)
-    if isinstance(msg, EtaTotalMsg):
-        return (msg.step, "total", msg.active_id)
-    if isinstance(msg, StateMsg):
-        return (msg.step, "state")
-    if isinstance(msg, CellMsg):
-        return (msg.step, "cell")
-    if isinstance(msg, ScanMsg):
-        return (msg.step, "scan")
-    raise TypeError(f"not a protocol message: {type(msg).__name__}")
+#: Mailbox routes by exact message type (the hot path of :meth:`RobotFilter.receive`);
+#: the sender is :func:`.messages.sender_of`.
+_ROUTES = {
+    StateMsg: lambda m: (m.robot_id, (m.step, "state")),
+    CellMsg: lambda m: (m.robot_id, (m.step, "cell")),
+    ScanMsg: lambda m: (m.robot_id, (m.step, "scan")),
+    TransferMsg: lambda m: (m.from_id, (m.step, "own" if m.kind == TransferKind.OWNERSHIP
+                                        else "phantom")),
+    EtaPartialMsg: lambda m: (m.sender_id, (m.step, "partial", m.active_id)),
+    EtaTotalMsg: lambda m: (m.active_id, (m.step, "total", m.active_id)),
+}
 
 
 def _cell_radius(q: np.ndarray, cell: np.ndarray) -> float:
@@ -1098,6 +1104,22 @@ def _cell_radius(q: np.ndarray, cell: np.ndarray) -> float:
     if len(cell) == 0:
         return 0.0
     return float(np.sqrt(((np.asarray(cell) - np.asarray(q)[None, :2]) ** 2).sum(axis=1).max()))
+
+
+def _cell_radii(generators: list[np.ndarray], cells: list[np.ndarray]) -> np.ndarray:
+    """:func:`_cell_radius` of each (generator, cell) pair, in one array operation, (N,)."""
+    out = np.zeros(len(cells))
+    sizes = np.array([len(c) for c in cells], dtype=np.int64)
+    full = np.flatnonzero(sizes)
+    if full.size == 0:
+        return out
+    vertices = np.concatenate([cells[i] for i in full]).reshape(-1, 2)
+    q = np.repeat(np.array([generators[i][:2] for i in full], dtype=float).reshape(-1, 2),
+                  sizes[full], axis=0)
+    d2 = ((vertices - q) ** 2).sum(axis=1)
+    starts = np.concatenate([[0], np.cumsum(sizes[full][:-1])])
+    out[full] = np.sqrt(np.maximum.reduceat(d2, starts))
+    return out
 
 
 def _bounding_boxes(cells: dict[int, tuple[np.ndarray, tuple[int, ...]]]
