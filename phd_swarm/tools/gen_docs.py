@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import os
+import re
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -30,7 +31,7 @@ from rclpy.qos import QoSProfile
 from phd_swarm.config import flatten, scenario_to_dict
 from phd_swarm.nodes import param_specs, qos, topics
 from phd_swarm.nodes.param_specs import ParamSpec
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.scenario import PRESETS, TARGET_KINDS
 
 #: Displayed name of a robot topic: ``/robot_<id>/<relative>``.
 ROBOT_PATTERN = "/robot_<id>/{}"
@@ -389,6 +390,15 @@ def scenario_defaults() -> dict[str, dict[str, Any]]:
     return {name: flatten(scenario_to_dict(make())) for name, make in PRESETS.items()}
 
 
+def _kinds_using(key: str, meaning: str) -> set[str] | None:
+    """Target kinds a ``targets.*`` field applies to, read from its meaning's clauses
+    (``"dames_walk: ..."``, ``"static: ...; dames_walk: ..."``); None: every preset."""
+    if not key.startswith("targets.") or key == "targets.kind":
+        return None
+    kinds = set(re.findall(r"(?:^|; )(\w+): ", meaning)) & set(TARGET_KINDS)
+    return kinds or None
+
+
 def render_parameters() -> str:
     """The text of docs/parameters.md."""
     tables = []
@@ -406,7 +416,9 @@ def render_parameters() -> str:
     for key, meaning in SCENARIO_MEANINGS.items():
         if key not in keys:
             continue
-        values = [f"`{_value(flat[key])}`" if key in flat else "-"
+        kinds = _kinds_using(key, meaning)
+        values = [f"`{_value(flat[key])}`"
+                  if key in flat and (kinds is None or flat["targets.kind"] in kinds) else "-"
                   for flat in defaults.values()]
         rows.append([f"`scenario.{key}`", *values, meaning])
     scenario_table = _table(("parameter", *defaults, "meaning"), rows)

@@ -46,6 +46,20 @@ def test_every_topic_parameter_and_key_is_in_the_text():
     assert set(param_specs.NODES.values()) <= {s for _, _, s in gen_docs.NODE_TABLES}
 
 
+def test_a_target_field_shows_only_for_the_presets_whose_kind_uses_it():
+    rows = {line.split(" | ")[0].strip("| `"): line.split(" | ")[1:4]
+            for line in gen_docs.render_parameters().splitlines()
+            if line.startswith("| `scenario.targets.")}
+    presets = list(gen_docs.scenario_defaults())
+    kinds = [gen_docs.scenario_defaults()[p]["targets.kind"] for p in presets]
+    for key, kind in [("scenario.targets.birth_heading", "dames_walk"),
+                      ("scenario.targets.step_sd", "clustered_walk"),
+                      ("scenario.targets.draw_box", "static")]:
+        shown = [value != "-" for value in rows[key]]
+        assert shown == [k == kind for k in kinds], key
+    assert all(value != "-" for value in rows["scenario.targets.count"])
+
+
 def test_qos_summary_resolves_writer_and_reader():
     assert gen_docs.qos_summary("INBOX") == \
         "reliable, transient local, depth 16 (writer) / 1000 (reader)"
