@@ -21,14 +21,14 @@ robot-id order, for the equivalence tests.
 
 from __future__ import annotations
 
-from collections import Counter, defaultdict, deque
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from phd_swarm.core.central import CentralPhdFilter
 from phd_swarm.core.controller import ControllerConfig, decide
-from phd_swarm.core.protocol.messages import Envelope, TransferKind, TransferMsg
+from phd_swarm.core.protocol.messages import Envelope, Message, TransferKind, TransferMsg
 from phd_swarm.core.protocol.robot import FilterContext, RobotFilter
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
@@ -44,9 +44,8 @@ _TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "ScanMsg": "M
                "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}
 
 
-def message_type(env: Envelope) -> str:
+def message_type(msg: Message) -> str:
     """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart)."""
-    msg = env.msg
     if isinstance(msg, TransferMsg):
         return "ParticleTransfer" if msg.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
     return _TYPE_NAMES[type(msg).__name__]
@@ -155,38 +154,30 @@ class InMemoryEngine:
             self.step()
 
     def _deliver(self, initial: list[Envelope], traffic: StepTraffic) -> None:
-        fifo: deque[Envelope] = deque(initial)
-        pool: list[Envelope] = []
+        """Deliver messages until every live robot has finished the step.
+
+        In order (no ``delivery_seed``) the queue is taken in rounds: every message queued
+        is handed to its receiver, then each receiver advances once, which is what a robot
+        does with a burst of messages and saves calling it on each. With a delivery seed
+        each message is drawn at random from all those queued and its receiver advances at
+        once, the finest interleaving. The result does not depend on the order (tested).
+        """
         shuffle = self._rng is not None
-        if shuffle:
-            pool, fifo = list(fifo), deque()
-        queue = pool if shuffle else fifo
-        robots, killed = self.robots, self.killed
-        messages, sizes = traffic.messages, traffic.bytes
-        last, kind, size = None, "", 0
+        robots = self.robots
         stalls = 0
         limit = 4 * self.ctx.timeout_ticks + 8
+        queue: list[Envelope] = list(initial)
         while True:
-            while fifo or pool:
+            while queue:
                 if shuffle:
-                    i = int(self._rng.integers(len(pool)))
-                    pool[i], pool[-1] = pool[-1], pool[i]
-                    env = pool.pop()
+                    i = int(self._rng.integers(len(queue)))
+                    queue[i], queue[-1] = queue[-1], queue[i]
+                    batch = [queue.pop()]
                 else:
-                    env = fifo.popleft()
-                dst = env.dst
-                if dst in killed or env.src in killed:
-                    traffic.lost += 1
-                    continue
-                msg = env.msg
-                # A broadcast is queued as consecutive envelopes of one message object.
-                if msg is not last:
-                    last, kind, size = msg, message_type(env), msg.wire_size()
-                messages[dst][kind] += 1
-                sizes[dst][kind] += size
-                robot = robots[dst]
-                robot.receive(msg)
-                queue.extend(robot.advance())
+                    batch, queue = queue, []
+                receivers = self._hand_out(batch, traffic)
+                for dst in receivers:
+                    queue.extend(robots[dst].advance())
             waiting = [rid for rid in self.live_ids() if not robots[rid].done]
             if not waiting:
                 return
@@ -197,6 +188,26 @@ class InMemoryEngine:
                                     f"{limit} rounds without progress: {phases}")
             for rid in waiting:
                 queue.extend(robots[rid].tick())
+
+    def _hand_out(self, batch: list[Envelope], traffic: StepTraffic) -> dict[int, None]:
+        """Buffer each message at its receiver and count it; returns the receivers, in order
+        of first message (messages from or to a killed robot are lost)."""
+        robots, killed = self.robots, self.killed
+        messages, sizes = traffic.messages, traffic.bytes
+        receivers: dict[int, None] = {}
+        last, kind, size = None, "", 0
+        for src, dst, msg in batch:
+            if dst in killed or src in killed:
+                traffic.lost += 1
+                continue
+            # A broadcast is queued as consecutive envelopes of one message object.
+            if msg is not last:
+                last, kind, size = msg, message_type(msg), msg.wire_size()
+            messages[dst][kind] += 1
+            sizes[dst][kind] += size
+            robots[dst].receive(msg)
+            receivers[dst] = None
+        return receivers
 
     # -------------------------------------------------------------- observation
     def team_weights(self) -> np.ndarray:

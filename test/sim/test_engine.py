@@ -125,8 +125,8 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
     engine.run(30)
     victim, original = 8, engine_module.message_type
 
-    def kill_at_first_cell(env):
-        kind = original(env)
+    def kill_at_first_cell(msg):
+        kind = original(msg)
         if kind == "CellPolygon" and victim not in engine.killed:
             engine.kill(victim)
         return kind
@@ -142,9 +142,9 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
 def _capture_messages(monkeypatch, engine_module, sink: list):
     original = engine_module.message_type
 
-    def record(env):
-        sink.append(env.msg)
-        return original(env)
+    def record(msg):
+        sink.append(msg)
+        return original(msg)
 
     monkeypatch.setattr(engine_module, "message_type", record)
 
