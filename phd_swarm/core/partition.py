@@ -34,6 +34,11 @@ from .grid import Environment, Grid
 #: stay in cache, which measured faster than larger blocks.
 _BLOCK_ELEMENTS = 1 << 16
 
+#: :func:`assign_bins` prunes generators per block of at most this many points ...
+_PRUNE_BLOCK = 4096
+#: ... when there are more generators than this.
+_PRUNE_MIN_GENERATORS = 8
+
 #: (bin, generator) pairs up to which :func:`bins_owned_in_box` evaluates every pair.
 _DIRECT_PAIRS = 1 << 14
 
@@ -98,7 +103,14 @@ def assign_bins(points: np.ndarray, positions: np.ndarray,
     Notes
     -----
     Points are processed in blocks of about 2**16 / R, so memory stays near 1 MB for any
-    N (10^6 points x 100 robots is fine).
+    N (10^6 points x 100 robots is fine). With more than :data:`_PRUNE_MIN_GENERATORS`
+    generators, each block of points first drops the generators that cannot own any of
+    its points, as :func:`bins_owned_in_box` does for its tiles: over the block's bounding
+    box, generator k's power distance lies in [L_k, U_k], and one with L_k > min_j U_j +
+    margin is beaten everywhere in the box. The remaining generators are compared in
+    increasing index order with the same per-pair values, so the owners, ties included,
+    are those of the full comparison; only the cost falls (with 40 generators around a
+    field of view at 0.1 m, ~6x fewer pairs).
     """
     q, rho2 = _check_generators(positions, power_weights)
     p = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -114,20 +126,43 @@ def assign_bins(points: np.ndarray, positions: np.ndarray,
     n_gen = q.shape[0]
     out = np.empty(p.shape[0], dtype=np.int64)
     q0, q1 = q[:, 0], q[:, 1]
-    block = max(1, _BLOCK_ELEMENTS // n_gen)
+    prune = n_gen > _PRUNE_MIN_GENERATORS and p.shape[0] > 1
+    block = min(_PRUNE_BLOCK, max(64, 2 * _BLOCK_ELEMENTS // n_gen)) if prune \
+        else max(1, _BLOCK_ELEMENTS // n_gen)
     for start in range(0, p.shape[0], block):
         x0 = p[start:start + block, 0:1]
         x1 = p[start:start + block, 1:2]
+        g0, g1, g_rho2 = q0, q1, rho2
+        if prune:
+            keep = _contenders(x0, x1, q, rho2)
+            g0, g1, g_rho2 = q0[keep], q1[keep], rho2[keep]
         # In-place ufuncs keep the memory at two blocks while computing the same rounded
         # values as the expression in the docstring, in the same order.
-        d = np.subtract(x0, q0)
+        d = np.subtract(x0, g0)
         np.square(d, out=d)
-        t = np.subtract(x1, q1)
+        t = np.subtract(x1, g1)
         np.square(t, out=t)
         d += t
-        d -= rho2
-        out[start:start + block] = np.argmin(d, axis=1)
+        d -= g_rho2
+        best = np.argmin(d, axis=1)
+        out[start:start + block] = keep[best] if prune else best
     return index[out] if candidates is not None else out
+
+
+def _contenders(x0: np.ndarray, x1: np.ndarray, q: np.ndarray,
+                rho2: np.ndarray) -> np.ndarray:
+    """Ascending indices of the generators that may own a point of the box spanned by the
+    points' coordinates x0, x1 (N, 1): those whose smallest power distance over the box is
+    not above the smallest largest one, plus a margin (see :func:`bins_owned_in_box`)."""
+    near_x, far_x = _axis_bounds(x0.min(keepdims=True).reshape(1),
+                                 x0.max(keepdims=True).reshape(1), q[:, 0])
+    near_y, far_y = _axis_bounds(x1.min(keepdims=True).reshape(1),
+                                 x1.max(keepdims=True).reshape(1), q[:, 1])
+    lower = near_x[0] ** 2 + near_y[0] ** 2 - rho2
+    far2 = far_x[0] ** 2 + far_y[0] ** 2
+    upper = far2 - rho2
+    margin = 1e-9 * (far2 + rho2).max()
+    return np.flatnonzero(lower <= upper.min() + margin)
 
 
 def bin_owners(grid: Grid, positions: np.ndarray,

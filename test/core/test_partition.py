@@ -285,6 +285,48 @@ def _check_partition(q: np.ndarray, rho: np.ndarray | None) -> None:
             assert n.size == 0
 
 
+
+def _one_shot_owner(points: np.ndarray, q: np.ndarray, rho: np.ndarray | None) -> np.ndarray:
+    rho2 = 0.0 if rho is None else rho ** 2
+    return np.argmin((points[:, 0:1] - q[:, 0]) ** 2 + (points[:, 1:2] - q[:, 1]) ** 2
+                     - rho2, axis=1)
+
+
+@settings(max_examples=150, deadline=None)
+@given(configurations(max_robots=40))
+def test_pruned_assignment_equals_the_full_comparison_ties_included(config):
+    # Bin centres on a 1/8 m lattice: exact ties between generators are common, and the
+    # pruning by bounding boxes must keep every generator that ties for a point.
+    q, rho = config
+    k = np.arange(-12, 108, 0.625)
+    points = np.stack(np.meshgrid(k, k, indexing="ij"), axis=-1).reshape(-1, 2)
+    np.testing.assert_array_equal(assign_bins(points, q, rho), _one_shot_owner(points, q, rho))
+
+
+def test_pruned_assignment_equals_the_full_comparison_random():
+    rng = np.random.default_rng(8)
+    q = rng.uniform(0, 100, (60, 2))
+    rho = rng.uniform(0, 10, 60)
+    # Clustered points, blocks of the same region, and scattered ones.
+    pts = np.concatenate([rng.normal(30, 3, (20_000, 2)), rng.uniform(-5, 105, (9_001, 2))])
+    for order in (np.arange(len(pts)), np.lexsort((pts[:, 0], pts[:, 1]))):
+        np.testing.assert_array_equal(assign_bins(pts[order], q, rho),
+                                      _one_shot_owner(pts[order], q, rho))
+        np.testing.assert_array_equal(assign_bins(pts[order], q, None),
+                                      _one_shot_owner(pts[order], q, None))
+
+
+def test_pruning_keeps_generators_tied_over_a_whole_block():
+    # Every point of the block is at (50, 50), equidistant from generators 3 and 7, which
+    # beat the rest: the block's distance bounds are exact, and both must stay (the lower
+    # index wins the tie).
+    q = np.array([[10.0 * i, 90.0] for i in range(12)])
+    q[3], q[7] = [47.0, 50.0], [53.0, 50.0]
+    points = np.full((100, 2), 50.0)
+    assert np.all(assign_bins(points, q) == 3)
+    assert np.all(assign_bins(points, q, candidates=[7, 3, 1]) == 3)
+
+
 @settings(max_examples=60, deadline=None)
 @given(configurations())
 def test_partition_invariants(config):
