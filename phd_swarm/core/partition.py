@@ -151,9 +151,12 @@ def assign_bins(points: np.ndarray, positions: np.ndarray,
 
 def _contenders(x0: np.ndarray, x1: np.ndarray, q: np.ndarray,
                 rho2: np.ndarray) -> np.ndarray:
-    """Ascending indices of the generators that may own a point of the box spanned by the
-    points' coordinates x0, x1 (N, 1): those whose smallest power distance over the box is
-    not above the smallest largest one, plus a margin (see :func:`bins_owned_in_box`)."""
+    """Ascending indices of the generators that may own a point in the points' bounding box.
+
+    The points' coordinates are x0, x1 (N, 1). Kept: the generators whose smallest power
+    distance over the box is not above the smallest largest one, plus a margin (see
+    :func:`bins_owned_in_box`).
+    """
     near_x, far_x = _axis_bounds(x0.min(keepdims=True).reshape(1),
                                  x0.max(keepdims=True).reshape(1), q[:, 0])
     near_y, far_y = _axis_bounds(x1.min(keepdims=True).reshape(1),

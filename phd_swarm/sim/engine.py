@@ -190,8 +190,11 @@ class InMemoryEngine:
                 queue.extend(robots[rid].tick())
 
     def _hand_out(self, batch: list[Envelope], traffic: StepTraffic) -> dict[int, None]:
-        """Buffer each message at its receiver and count it; returns the receivers, in order
-        of first message (messages from or to a killed robot are lost)."""
+        """Buffer each message at its receiver and count it; return the receivers.
+
+        Receivers come in the order of their first message. Messages from or to a killed
+        robot are lost (counted in ``traffic.lost``).
+        """
         robots, killed = self.robots, self.killed
         messages, sizes = traffic.messages, traffic.bytes
         receivers: dict[int, None] = {}

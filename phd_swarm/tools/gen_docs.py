@@ -391,8 +391,11 @@ def scenario_defaults() -> dict[str, dict[str, Any]]:
 
 
 def _kinds_using(key: str, meaning: str) -> set[str] | None:
-    """Target kinds a ``targets.*`` field applies to, read from its meaning's clauses
-    (``"dames_walk: ..."``, ``"static: ...; dames_walk: ..."``); None: every preset."""
+    """Target kinds a ``targets.*`` field applies to (None: every preset).
+
+    Read from the clauses of its meaning: ``"dames_walk: ..."``,
+    ``"static: ...; dames_walk: ..."``.
+    """
     if not key.startswith("targets.") or key == "targets.kind":
         return None
     kinds = set(re.findall(r"(?:^|; )(\w+): ", meaning)) & set(TARGET_KINDS)

@@ -579,10 +579,8 @@ class RobotFilter:
         radii = _cell_radii([np.asarray(m.generator, dtype=float) for m in cells.values()],
                             [cur.cells[src][0] for src in cells])
         order = np.argsort(radius_ids, kind="stable")
-        relay_ids = tuple(radius_ids[order].tolist())
-        relay_radii = radii[order]
-        cur.fresh_ids = np.asarray(relay_ids, dtype=np.int64)
-        cur.fresh_radii = relay_radii
+        cur.fresh_ids, cur.fresh_radii = radius_ids[order], radii[order]
+        relay_ids, relay_radii = tuple(cur.fresh_ids.tolist()), cur.fresh_radii
         cur.cell_ids, cur.cell_lo, cur.cell_hi = _bounding_boxes(cur.cells)
         self._check_cell()
         cur.owned = self._owned_bins(cur.cell, cur.ids, cur.positions, cur.weights)
@@ -1086,8 +1084,8 @@ def _mail_route(msg: Message) -> tuple[int, tuple]:
     return route(msg)
 
 
-#: Mailbox routes by exact message type (the hot path of :meth:`RobotFilter.receive`);
-#: the sender is :func:`.messages.sender_of`.
+#: Mailbox routes by exact message type (the hot path of :meth:`RobotFilter.receive`); the
+#: sender they give is :func:`.messages.sender_of`'s (tested).
 _ROUTES = {
     StateMsg: lambda m: (m.robot_id, (m.step, "state")),
     CellMsg: lambda m: (m.robot_id, (m.step, "cell")),
