@@ -9,11 +9,28 @@
 #    editing them needs no rebuild).
 #
 # Native ROS install instead: `source /opt/ros/jazzy/setup.bash && colcon build` (README).
+#
+# `scripts/setup.sh --build-hash` prints the hash of the build inputs and exits.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 VENV="${PHD_SWARM_VENV:-$ROOT/.venv}"
 LOCK="$ROOT/requirements.lock"
+
+# Hash of what colcon builds from: the message package, the manifests and the lock. Python
+# sources and config/*.yaml are installed as symlinks (--symlink-install), so only the
+# *names* of the installed config files count: editing a config needs no rebuild, adding
+# or removing one does. (config/sweeps is not installed.)
+build_inputs_hash() {
+  { find msg_defs -type f -print0 | sort -z | xargs -0 sha256sum
+    sha256sum package.xml setup.py setup.cfg resource/phd_swarm
+    find config -maxdepth 1 -type f -name '*.yaml' -printf '%f\n' 2>/dev/null | sort
+    sha256sum "$LOCK" | cut -d' ' -f1; } | sha256sum | cut -d' ' -f1
+}
+if [ "${1:-}" = "--build-hash" ]; then
+  build_inputs_hash
+  exit 0
+fi
 
 log() { printf '[setup] %s\n' "$*"; }
 
@@ -50,11 +67,7 @@ if ! command -v cmake >/dev/null 2>&1; then
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "cmake>=3.22,<4"
 fi
 
-# Build inputs of the colcon packages (Python sources are symlinked and excluded).
-build_sum="$( { find msg_defs -type f -print0 | sort -z | xargs -0 sha256sum;
-               sha256sum package.xml setup.py setup.cfg resource/phd_swarm;
-               find config -type f -print0 2>/dev/null | sort -z | xargs -0 -r sha256sum;
-               echo "$lock_sum"; } | sha256sum | cut -d' ' -f1)"
+build_sum="$(build_inputs_hash)"
 if [ "$(cat install/.phd_swarm_build.sha256 2>/dev/null)" != "$build_sum" ]; then
   log "building msg_defs and phd_swarm with colcon"
   set +u
