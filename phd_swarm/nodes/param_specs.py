@@ -90,10 +90,12 @@ ROBOT = (
     ParamSpec("cumulative_mode", "rate", "Chen eq. 11: rate (default) or literal reading, "
               "or laplace: the rule of succession (docs/decisions.md).",
               choices=("rate", "literal", "laplace")),
-    ParamSpec("tick_period", 1.0, "Wall seconds without any protocol message after which "
-              "one timeout round passes [s].", low=0.01, high=600.0),
-    ParamSpec("timeout_ticks", 5, "Rounds without an answer before a silent peer is "
-              "declared dead.", low=1, high=1000),
+    ParamSpec("tick_period", 1.0, "Wall seconds without a new protocol message after which "
+              "one timeout round passes, and a waiting robot sends a keep-alive [s].",
+              low=0.01, high=600.0),
+    ParamSpec("timeout_ticks", 5, "Rounds without an answer before an awaited peer not "
+              "heard from in that time (keep-alives included) is declared dead.", low=1,
+              high=1000),
     ParamSpec("observers", 0, "Number of observers that must have matched this robot's "
               "status topic before it reports ready.", low=0, high=64),
     ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for the team state and the "

@@ -15,8 +15,10 @@ eq. 2-3 and 12-14). Per step k:
    ``STEP_DONE`` status, which is what the world waits for in lockstep mode.
 
 A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds: if no
-protocol message arrived during a period while the step waits, one round passes
-(:meth:`RobotFilter.tick`); after ``timeout_ticks`` rounds silent peers are declared dead.
+new protocol message arrived during a period while the step waits, one round passes
+(:meth:`RobotFilter.tick`), and the robot re-sends its state to its contacts as a
+keep-alive; after ``timeout_ticks`` rounds the awaited peers not heard from in that time
+are declared dead (keep-alives count as heard, not as new).
 
 At start-up the robot waits for the world's team state (``/world/robots``, latched) to
 initialise its partition, and for ``observers`` subscribers on its status and density, then
@@ -249,9 +251,10 @@ class RobotNode(Node):
         except convert.InvalidMessage as exc:
             self._reject(kind, f"inbox/{kind}: {exc}")
             return
-        self._heard = True
         self._received[msg.step] += 1
-        self.filter.receive(msg)
+        # A keep-alive (a repeated state) does not hold this robot's own rounds back.
+        if self.filter.receive(msg):
+            self._heard = True
         if self.filter.done:
             return
         self._send(self.filter.advance())

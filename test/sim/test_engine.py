@@ -139,6 +139,38 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
     assert _stats(engine).get("lost_to_dead", 0) > 0
 
 
+@pytest.mark.parametrize("kind", ["PhantomTransfer", "MeasurementSet"])
+@pytest.mark.parametrize("ticks", [1, 2, 5])
+def test_a_death_mid_step_costs_the_dead_robot_only(monkeypatch, kind, ticks):
+    # Robot 8 dies in the middle of a step, in the prediction (phantom mass) or the update
+    # (measurement sets). Its contacts block on it, and the robots that wait for them must
+    # not take them for dead: blocked robots send keep-alives. Before keep-alives, 2-3
+    # live robots were declared dead by the whole team, for good.
+    import phd_swarm.sim.engine as engine_module
+
+    engine = InMemoryEngine(sc.dames_moving(robots=20, targets=20).with_overrides(seed=0),
+                            "phd", timeout_ticks=ticks)
+    engine.run(30)
+    victim, original = 8, engine_module.message_type
+
+    def kill_at_first(msg):
+        name = original(msg)
+        if name == kind and victim not in engine.killed:
+            engine.kill(victim)
+        return name
+
+    monkeypatch.setattr(engine_module, "message_type", kill_at_first)
+    engine.step()
+    monkeypatch.setattr(engine_module, "message_type", original)
+    engine.run(3)
+    assert victim in engine.killed and engine.step_index == 34
+    live = engine.live_ids()
+    assert {r: engine.robots[r].dead - {victim} for r in live} == {r: set() for r in live}
+    assert any(victim in engine.robots[r].dead for r in live)
+    counts = engine.ownership_counts()
+    assert counts.min() == 1 and counts.max() == 1, "survivors own every bin exactly once"
+
+
 def _capture_messages(monkeypatch, engine_module, sink: list):
     original = engine_module.message_type
 

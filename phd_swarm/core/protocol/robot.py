@@ -41,9 +41,13 @@ start the team's configuration is known to all once (:meth:`RobotFilter.initiali
 A field-of-view bin outside every known cell would mean an unknown robot owns it; that is
 counted in ``stats['uncovered_fov_bins']`` (zero in every test run).
 
-Failures: every wait counts :meth:`tick` s (rounds without progress); after
-``timeout_ticks`` the robots that did not answer are declared dead, dropped from every set,
-and the step goes on with what arrived. Bins that a robot owns but nobody handed to it (those
+Failures: every wait counts :meth:`tick` s (rounds without progress). A robot that waits
+re-sends its state of the step to its contacts on every tick, a keep-alive: a peer that is
+itself blocked (on a robot that died) is slow, not dead. After ``timeout_ticks`` rounds the
+awaited robots from which nothing at all arrived in the last ``timeout_ticks`` rounds are
+declared dead, dropped from every set, and the step goes on with what arrived; after
+``3 x timeout_ticks`` rounds without progress every awaited robot is (a wait that cannot
+end). Bins that a robot owns but nobody handed to it (those
 of a dead robot) are re-initialised to the prior mass ``models.initial_density *
 bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``. Bins of the previous
 cell that the partition gives to a robot that died during the step (its state arrived, its
@@ -281,6 +285,7 @@ class _StepData:
     power_weight: float
     z: np.ndarray
     radius: float = 0.0
+    state: StateMsg | None = None
     ids: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
     positions: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
     weights: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -340,6 +345,9 @@ class RobotFilter:
         self.neighbours: tuple[int, ...] = ()
         self.contacts: tuple[int, ...] = ()
         self.dead: set[int] = set()
+        #: Rounds ticked so far, and the round in which each peer was last heard from.
+        self._round = 0
+        self._heard: dict[int, int] = {}
         self.phase = Phase.IDLE
         self.stats: dict[str, int] = defaultdict(int)
         self._last_step = -1
@@ -420,21 +428,32 @@ class RobotFilter:
         self._idle_ticks = 0
         self._cur.radius = self.cell_radius
         state = StateMsg(self.robot_id, step, position, float(power_weight), self.cell_radius)
+        self._cur.state = state
         out = [self._to(c, state) for c in self.contacts]
         return out + self.advance()
 
-    def receive(self, msg: Message) -> None:
-        """Buffer an incoming message; call :meth:`advance` to act on it."""
+    def receive(self, msg: Message) -> bool:
+        """Buffer an incoming message; call :meth:`advance` to act on it.
+
+        Any message from a live peer, even one dropped as stale, shows that the peer is
+        alive (see :meth:`tick`). Returns whether the message is new: False when it is
+        dropped, or repeats one already held (a keep-alive).
+        """
+        src, key = _mail_route(msg)
+        if src in self.dead or src == self.robot_id:
+            self.stats["dropped"] += 1
+            return False
+        self._heard[src] = self._round
         step = msg.step
         if step < self._last_step or (self._cur is not None and step == self._last_step
                                       and self.phase == Phase.DONE):
             self.stats["dropped"] += 1
-            return
-        src, key = _mail_route(msg)
-        if src in self.dead or src == self.robot_id:
-            self.stats["dropped"] += 1
-            return
-        self._mail[key][src] = msg
+            return False
+        box = self._mail[key]
+        if src in box and isinstance(msg, StateMsg):
+            return False
+        box[src] = msg
+        return True
 
     def advance(self) -> list[Envelope]:
         """Make as much progress as the buffered messages allow; returns what to send."""
@@ -451,21 +470,39 @@ class RobotFilter:
         return out
 
     def tick(self) -> list[Envelope]:
-        """One round passed without progress anywhere; time out silent peers if it is due."""
-        if self.done or self._cur is None:
+        """One round passed without progress anywhere; time out silent peers if it is due.
+
+        Returns the keep-alives (this step's state again, to every contact) and what the
+        step sends if a timeout lets it go on. Of the awaited peers, only those silent for
+        the last ``timeout_ticks`` rounds are declared dead; after ``3 x timeout_ticks``
+        rounds without progress, all of them.
+        """
+        cur = self._cur
+        if self.done or cur is None:
             return []
+        self._round += 1
         self._idle_ticks += 1
-        if self._idle_ticks < self.ctx.timeout_ticks:
-            return []
-        self._idle_ticks = 0
+        assert cur.state is not None
+        alive = [self._to(c, cur.state) for c in self.contacts]
+        timeout = self.ctx.timeout_ticks
+        if self._idle_ticks < timeout:
+            return alive
         missing = self._missing()
-        if missing:
+        # A message taken in after tick r arrived in round r + 1's interval: silent means
+        # nothing in the last ``timeout`` intervals.
+        silent = {p for p in missing
+                  if self._round - self._heard.get(p, -timeout - 1) > timeout}
+        if missing and not silent and self._idle_ticks < 3 * timeout:
+            return alive
+        self._idle_ticks = 0
+        dead = silent or missing
+        if dead:
             self.stats["timeouts"] += 1
             _log.warning("robot %d: no answer from %s in phase %s of step %d after %d "
-                         "rounds; declared dead", self.robot_id, sorted(missing),
-                         self.phase.value, self._last_step, self.ctx.timeout_ticks)
-            self._declare_dead(missing)
-        return self.advance()
+                         "rounds; declared dead", self.robot_id, sorted(dead),
+                         self.phase.value, self._last_step, timeout)
+            self._declare_dead(dead)
+        return alive + self.advance()
 
     # ----------------------------------------------------------------- phases
     def _progress(self) -> list[Envelope]:

@@ -19,6 +19,7 @@ from phd_swarm.core.protocol.messages import (
 )
 from phd_swarm.core.protocol.robot import (
     FilterContext,
+    Phase,
     ProtocolError,
     RobotFilter,
     _mail_route,
@@ -84,3 +85,51 @@ def test_mailbox_routes_name_the_sender_as_sender_of_does():
         assert _mail_route(msg) == (sender_of(msg), key) == (4, key)
     with pytest.raises(TypeError, match="not a protocol message"):
         _mail_route(object())
+
+
+def test_a_waiting_robot_sends_keep_alives_and_times_out_only_silent_peers():
+    # Robot 0 has the states of 1 and 2 and waits for their cells. Robot 1 is blocked
+    # elsewhere (on a robot that died) and keeps re-sending its state, a keep-alive;
+    # robot 2 sends nothing more: only robot 2 is declared dead.
+    ctx = FilterContext(CTX.grid, CTX.models, timeout_ticks=2)
+    robot = RobotFilter(0, ctx)
+    robot.initialise([0, 1, 2], POS)
+    robot.start_step(0, POS[0], 0.0, np.empty((0, 2)))
+    for rid in (1, 2):
+        assert robot.receive(StateMsg(rid, 0, POS[rid], 0.0)) is True
+    robot.advance()
+    assert robot.phase is Phase.CELLS
+    for _ in range(5):
+        contacts = sorted(robot.contacts)
+        out = robot.tick()
+        # Every tick re-sends the own state of the step to every contact.
+        states = [e for e in out if isinstance(e.msg, StateMsg)]
+        assert sorted(e.dst for e in states) == contacts == [1, 2]
+        assert all(e.msg.step == 0 and e.msg.robot_id == 0 for e in states)
+        assert robot.receive(StateMsg(1, 0, POS[1], 0.0)) is False  # a repeat, not new
+        if robot.dead:
+            break
+    assert robot.dead == {2} and robot.stats["timeouts"] == 1
+    assert robot.phase is Phase.CELLS  # still waiting for robot 1, which is alive
+
+
+def test_a_wait_that_cannot_end_times_out_every_awaited_peer():
+    # Robot 1 keeps sending keep-alives but never the cell robot 0 waits for: after
+    # 3 x timeout_ticks rounds without progress it is declared dead all the same.
+    ctx = FilterContext(CTX.grid, CTX.models, timeout_ticks=2)
+    robot = RobotFilter(0, ctx)
+    robot.initialise([0, 1, 2], POS)
+    robot.start_step(0, POS[0], 0.0, np.empty((0, 2)))
+    for rid in (1, 2):
+        robot.receive(StateMsg(rid, 0, POS[rid], 0.0))
+    robot.advance()
+    cells = {rid: CellMsg(rid, 0, POS[rid], 0.0, np.empty((0, 2)), ()) for rid in (1, 2)}
+    robot.receive(cells[2])
+    robot.advance()
+    rounds = 0
+    while not robot.dead:
+        rounds += 1
+        robot.tick()
+        robot.receive(StateMsg(1, 0, POS[1], 0.0))
+        assert rounds <= 6
+    assert robot.dead == {1} and rounds == 6
