@@ -118,40 +118,22 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
     # Robot 8 dies after its state of step 30 reached the others (so it is in their
     # partition) and before it sends its cell: the bins the partition gives it are dropped
     # (their next owner re-initialises them) instead of failing the step.
-    import phd_swarm.sim.engine as engine_module
-
     scenario = sc.dames_static(robots=12, targets=20).with_overrides(seed=0)
     engine = InMemoryEngine(scenario, "phd", timeout_ticks=2)
     engine.run(30)
-    victim, original = 8, engine_module.message_type
-
-    def kill_at_first_cell(msg):
-        kind = original(msg)
-        if kind == "CellPolygon" and victim not in engine.killed:
-            engine.kill(victim)
-        return kind
-
-    monkeypatch.setattr(engine_module, "message_type", kill_at_first_cell)
-    engine.step()
-    monkeypatch.setattr(engine_module, "message_type", original)
+    _step_killing_at_first(monkeypatch, engine, 8, "CellPolygon")
     engine.run(3)
-    assert victim in engine.killed and engine.step_index == 34
+    assert 8 in engine.killed and engine.step_index == 34
     assert _stats(engine).get("lost_to_dead", 0) > 0
 
 
-@pytest.mark.parametrize("kind", ["PhantomTransfer", "MeasurementSet"])
-@pytest.mark.parametrize("ticks", [1, 2, 5])
-def test_a_death_mid_step_costs_the_dead_robot_only(monkeypatch, kind, ticks):
-    # Robot 8 dies in the middle of a step, in the prediction (phantom mass) or the update
-    # (measurement sets). Its contacts block on it, and the robots that wait for them must
-    # not take them for dead: blocked robots send keep-alives. Before keep-alives, 2-3
-    # live robots were declared dead by the whole team, for good.
+def _step_killing_at_first(monkeypatch, engine: InMemoryEngine, victim: int,
+                           kind: str) -> None:
+    """Run one step, killing ``victim`` when the first message of type ``kind`` is
+    delivered."""
     import phd_swarm.sim.engine as engine_module
 
-    engine = InMemoryEngine(sc.dames_moving(robots=20, targets=20).with_overrides(seed=0),
-                            "phd", timeout_ticks=ticks)
-    engine.run(30)
-    victim, original = 8, engine_module.message_type
+    original = engine_module.message_type
 
     def kill_at_first(msg):
         name = original(msg)
@@ -162,6 +144,20 @@ def test_a_death_mid_step_costs_the_dead_robot_only(monkeypatch, kind, ticks):
     monkeypatch.setattr(engine_module, "message_type", kill_at_first)
     engine.step()
     monkeypatch.setattr(engine_module, "message_type", original)
+
+
+@pytest.mark.parametrize("kind", ["PhantomTransfer", "MeasurementSet"])
+@pytest.mark.parametrize("ticks", [1, 2, 5])
+def test_a_death_mid_step_costs_the_dead_robot_only(monkeypatch, kind, ticks):
+    # Robot 8 dies in the middle of a step, in the prediction (phantom mass) or the update
+    # (measurement sets). Its contacts block on it, and the robots that wait for them must
+    # not take them for dead: blocked robots send keep-alives. Before keep-alives, 2-3
+    # live robots were declared dead by the whole team, for good.
+    engine = InMemoryEngine(sc.dames_moving(robots=20, targets=20).with_overrides(seed=0),
+                            "phd", timeout_ticks=ticks)
+    engine.run(30)
+    victim = 8
+    _step_killing_at_first(monkeypatch, engine, victim, kind)
     engine.run(3)
     assert victim in engine.killed and engine.step_index == 34
     live = engine.live_ids()

@@ -87,18 +87,23 @@ def test_mailbox_routes_name_the_sender_as_sender_of_does():
         _mail_route(object())
 
 
-def test_a_waiting_robot_sends_keep_alives_and_times_out_only_silent_peers():
-    # Robot 0 has the states of 1 and 2 and waits for their cells. Robot 1 is blocked
-    # elsewhere (on a robot that died) and keeps re-sending its state, a keep-alive;
-    # robot 2 sends nothing more: only robot 2 is declared dead.
-    ctx = FilterContext(CTX.grid, CTX.models, timeout_ticks=2)
-    robot = RobotFilter(0, ctx)
+def _waiting_for_cells() -> RobotFilter:
+    """Robot 0 at step 0 with the states of robots 1 and 2, waiting for their cells."""
+    robot = RobotFilter(0, FilterContext(CTX.grid, CTX.models, timeout_ticks=2))
     robot.initialise([0, 1, 2], POS)
     robot.start_step(0, POS[0], 0.0, np.empty((0, 2)))
     for rid in (1, 2):
         assert robot.receive(StateMsg(rid, 0, POS[rid], 0.0)) is True
     robot.advance()
     assert robot.phase is Phase.CELLS
+    return robot
+
+
+def test_a_waiting_robot_sends_keep_alives_and_times_out_only_silent_peers():
+    # Robot 0 has the states of 1 and 2 and waits for their cells. Robot 1 is blocked
+    # elsewhere (on a robot that died) and keeps re-sending its state, a keep-alive;
+    # robot 2 sends nothing more: only robot 2 is declared dead.
+    robot = _waiting_for_cells()
     for _ in range(5):
         contacts = sorted(robot.contacts)
         out = robot.tick()
@@ -116,13 +121,7 @@ def test_a_waiting_robot_sends_keep_alives_and_times_out_only_silent_peers():
 def test_a_wait_that_cannot_end_times_out_every_awaited_peer():
     # Robot 1 keeps sending keep-alives but never the cell robot 0 waits for: after
     # 3 x timeout_ticks rounds without progress it is declared dead all the same.
-    ctx = FilterContext(CTX.grid, CTX.models, timeout_ticks=2)
-    robot = RobotFilter(0, ctx)
-    robot.initialise([0, 1, 2], POS)
-    robot.start_step(0, POS[0], 0.0, np.empty((0, 2)))
-    for rid in (1, 2):
-        robot.receive(StateMsg(rid, 0, POS[rid], 0.0))
-    robot.advance()
+    robot = _waiting_for_cells()
     cells = {rid: CellMsg(rid, 0, POS[rid], 0.0, np.empty((0, 2)), ()) for rid in (1, 2)}
     robot.receive(cells[2])
     robot.advance()
