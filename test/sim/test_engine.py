@@ -129,8 +129,7 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
 
 def _step_killing_at_first(monkeypatch, engine: InMemoryEngine, victim: int,
                            kind: str) -> None:
-    """Run one step, killing ``victim`` when the first message of type ``kind`` is
-    delivered."""
+    """Run one step, killing ``victim`` at the delivery of the first ``kind`` message."""
     import phd_swarm.sim.engine as engine_module
 
     original = engine_module.message_type
