@@ -1,6 +1,7 @@
-"""Parameter sweeps on the in-memory engine: the papers' box plots, trial by trial.
+"""Parameter sweeps: the papers' box plots, trial by trial.
 
-``scripts/sweep.sh SPEC [--quick] [--workers N] [--out DIR] [--plot-only] [--dry-run]``
+``scripts/sweep.sh SPEC [--quick] [--workers N] [--engine E] [--out DIR] [--plot-only]
+[--dry-run]``
 
 SPEC is a name under ``config/sweeps/`` or a path to a spec file
 (:mod:`phd_swarm.tools.sweep_spec`). The specs in the repository reproduce Dames (2020)
@@ -8,14 +9,18 @@ Fig. 2 (static targets, final OSPA) and Fig. 5 (moving targets, mean OSPA over t
 250 s), and Chen, Dames & Park (2021) Fig. 3a/b (clustered targets, median OSPA over
 300-1000 s, and the mean OSPA over time).
 
-Each trial runs :class:`phd_swarm.sim.engine.InMemoryEngine`, which computes exactly the
-ROS stack's team PHD, and scores every step with
+Each trial runs on the spec's engine (``engine:``, or ``--engine``): by default
+:class:`phd_swarm.sim.central_engine.CentralEngine`, one filter and one partition for the
+team, or :class:`phd_swarm.sim.engine.InMemoryEngine`, the robots' protocol message by
+message, which computes exactly the ROS stack's team PHD and is several times slower. The
+two agree up to rounding (test/sim/test_central_engine.py). Every step is scored with
 :func:`phd_swarm.core.scoring.score_step`, as the live monitor does: the truth X^k is taken
 before step k and compared with the team PHD after the step's update (OSPA, Dames eq. 12,
-c = 10 m, p = 1). A trial's result depends only on its scenario (seed included) and
-controller, never on the worker or the order.
+c = 10 m, p = 1). A trial's result depends only on its scenario (seed included),
+controller and engine, never on the worker or the order.
 
-Outputs in ``<out>`` (default ``runs/sweeps/<name>`` or ``runs/sweeps/<name>_quick``):
+Outputs in ``<out>`` (default ``results/sweeps/<name>``, kept in git, or
+``runs/sweeps/<name>_quick``):
 
 - ``results.csv``: one row per finished trial (:data:`COLUMNS`), appended and flushed as
   each trial finishes. Running the same command again skips the trials already there; a
@@ -56,6 +61,7 @@ from typing import IO, Any
 import numpy as np
 
 from phd_swarm.tools.sweep_spec import (
+    ENGINES,
     SpecError,
     SweepSpec,
     Trial,
@@ -65,18 +71,19 @@ from phd_swarm.tools.sweep_spec import (
 )
 
 #: Columns of results.csv, in order.
-COLUMNS = ("spec", "trial", "method", "controller", "robots", "targets", "resolution",
-           "seed", "trial_index", "steps", "duration_s", "metric", "value", "ospa_final",
-           "ospa_mean_window", "ospa_median_window", "window_start_s", "window_end_s",
-           "cardinality_true_final", "cardinality_est_final", "expected_cardinality_final",
-           "cardinality_true_mean_window", "cell_mismatch", "misrouted_bins",
-           "unroutable_bins", "duplicate_bins", "orphan_bins", "wall_s", "cpu_s",
-           "config_hash")
+COLUMNS = ("spec", "trial", "method", "controller", "engine", "robots", "targets",
+           "resolution", "seed", "trial_index", "steps", "duration_s", "metric", "value",
+           "ospa_final", "ospa_mean_window", "ospa_median_window", "window_start_s",
+           "window_end_s", "cardinality_true_final", "cardinality_est_final",
+           "expected_cardinality_final", "cardinality_true_mean_window", "cell_mismatch",
+           "misrouted_bins", "unroutable_bins", "duplicate_bins", "orphan_bins", "timeouts",
+           "lost_to_dead", "wall_s", "cpu_s", "config_hash")
 
 #: Robot protocol counters summed over the team into results.csv (see
-#: :mod:`phd_swarm.core.protocol.robot`): a missed neighbour and what it cost.
+#: :mod:`phd_swarm.core.protocol.robot`): a missed neighbour and what it cost, peers
+#: declared dead by a timeout and the bins lost with them.
 PROTOCOL_COLUMNS = ("cell_mismatch", "misrouted_bins", "unroutable_bins", "duplicate_bins",
-                    "orphan_bins")
+                    "orphan_bins", "timeouts", "lost_to_dead")
 
 #: Columns that differ between two runs of the same trial (timings).
 TIMING_COLUMNS = ("wall_s", "cpu_s")
@@ -109,11 +116,10 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         Per-step arrays (:data:`SERIES`), shape (steps,); ``t = k dt`` [s].
     """
     from phd_swarm.core.scoring import score_step
-    from phd_swarm.sim.engine import InMemoryEngine
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     sc = trial.scenario
-    engine = InMemoryEngine(sc, controller_config(trial.controller, sc))
+    engine = make_engine(trial.engine, sc, controller_config(trial.controller, sc))
     n = sc.steps
     s = {name: np.zeros(n) for name in SERIES}
     for k in range(n):
@@ -130,7 +136,8 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     stats = {"final": float(ospa[-1]), "mean": float(np.mean(ospa[in_window])),
              "median": float(np.median(ospa[in_window]))}
     row = {"spec": "", "trial": trial.key, "method": trial.method,
-           "controller": trial.controller, "robots": trial.robots, "targets": trial.targets,
+           "controller": trial.controller, "engine": trial.engine, "robots": trial.robots,
+           "targets": trial.targets,
            "resolution": trial.resolution, "seed": trial.seed, "trial_index": trial.index,
            "steps": n, "duration_s": n * sc.dt, "metric": trial.metric,
            "value": stats[trial.metric], "ospa_final": stats["final"],
@@ -140,11 +147,27 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
            "cardinality_est_final": int(s["cardinality_est"][-1]),
            "expected_cardinality_final": float(s["expected_cardinality"][-1]),
            "cardinality_true_mean_window": float(np.mean(s["cardinality_true"][in_window])),
-           **{c: sum(r.stats.get(c, 0) for r in engine.robots.values())
-              for c in PROTOCOL_COLUMNS},
+           **protocol_counters(engine),
            "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0,
            "config_hash": trial.config_hash}
     return row, s
+
+
+def make_engine(name: str, scenario, controller):
+    """The engine ``name`` (:data:`~phd_swarm.tools.sweep_spec.ENGINES`) for one trial."""
+    if name == "central":
+        from phd_swarm.sim.central_engine import CentralEngine
+        return CentralEngine(scenario, controller)
+    if name == "distributed":
+        from phd_swarm.sim.engine import InMemoryEngine
+        return InMemoryEngine(scenario, controller)
+    raise ValueError(f"unknown engine {name!r}")
+
+
+def protocol_counters(engine) -> dict[str, int]:
+    """:data:`PROTOCOL_COLUMNS` summed over the robots (all 0 without a protocol)."""
+    robots = getattr(engine, "robots", {})
+    return {c: sum(r.stats.get(c, 0) for r in robots.values()) for c in PROTOCOL_COLUMNS}
 
 
 class _Collect(logging.Handler):
@@ -245,7 +268,7 @@ def save_series(path: Path, series: dict[str, np.ndarray], config_hash: str) -> 
     """Write ``series`` to ``path`` (.npz) atomically."""
     tmp = path.with_suffix(".tmp")
     with open(tmp, "wb") as f:
-        np.savez(f, config_hash=np.array(config_hash), **series)
+        np.savez_compressed(f, config_hash=np.array(config_hash), **series)
     os.replace(tmp, path)
 
 
@@ -350,7 +373,10 @@ def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial
     Returns
     -------
     done, todo : list of Trial
-        Trials with a matching row, and the rest (longest first: shorter makespan).
+        Trials with a matching row, and the rest: seed by seed (trial index first), the
+        longest first within a seed (shorter makespan). A sweep stopped part-way thus
+        leaves every cell of the figure with the same number of seeds, give or take one,
+        and the figures of a partial sweep are those of a smaller full one.
     stray : int
         Rows of results.csv that are no trial of this spec (ignored).
 
@@ -377,7 +403,7 @@ def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial
             f"again.")
     keys = {t.key for t in trials}
     stray = sum(1 for k in results.rows if k not in keys)
-    todo.sort(key=lambda t: -t.cost())
+    todo.sort(key=lambda t: (t.index, -t.cost()))
     return done, todo, stray
 
 
@@ -486,23 +512,37 @@ def _log_session(out: Path, session: dict[str, Any]) -> dict[str, Any]:
 
 
 def default_out(spec: SweepSpec) -> Path:
-    """``runs/sweeps/<name>[_quick]`` under the repository (``$PHD_SWARM_ROOT``) or here."""
+    """Where a sweep writes by default, under the repository (``$PHD_SWARM_ROOT``) or here.
+
+    A full form writes to ``results/sweeps/<name>``, which is kept in git: the full forms
+    take longer than one working session, so their rows are committed as they come and a
+    later session (or another machine) resumes them. A quick form writes to
+    ``runs/sweeps/<name>_quick`` (not in git).
+    """
     root = os.environ.get("PHD_SWARM_ROOT")
-    return (Path(root) if root else Path.cwd()) / "runs" / "sweeps" / spec.label
+    base = Path(root) if root else Path.cwd()
+    if spec.quick:
+        return base / "runs" / "sweeps" / spec.label
+    return base / "results" / "sweeps" / spec.label
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
     """Command-line options (see the module docstring)."""
     p = argparse.ArgumentParser(prog="scripts/sweep.sh",
-                                description="Run a parameter sweep (config/sweeps/*.yaml) on "
-                                            "the in-memory engine; results, plots and a "
-                                            "summary in runs/sweeps/<name>/.")
+                                description="Run a parameter sweep (config/sweeps/*.yaml); "
+                                            "results, plots and a summary in "
+                                            "results/sweeps/<name>/.")
     p.add_argument("spec", help="spec name under config/sweeps/ or path to a spec file")
     p.add_argument("--quick", action="store_true", help="the spec's quick form")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="N",
                    help="worker processes (default: the number of CPUs, %(default)s)")
     p.add_argument("--out", type=Path, help="output directory (default "
-                                            "runs/sweeps/<name>[_quick])")
+                                            "results/sweeps/<name>, in git, for a full "
+                                            "form; runs/sweeps/<name>_quick for --quick)")
+    p.add_argument("--engine", choices=ENGINES, default=None,
+                   help="run the trials on this engine instead of the spec's (default "
+                        "central: one filter for the team; distributed: the robots' "
+                        "protocol, bit-equal to the ROS stack, several times slower)")
     p.add_argument("--plot-only", action="store_true",
                    help="only redraw the plots and summary from the existing results")
     p.add_argument("--dry-run", action="store_true",
@@ -519,7 +559,7 @@ def main(argv: list[str] | None = None) -> int:
     wall0, cpu0 = time.monotonic(), _cpu_seconds()
     started = _dt.datetime.now().isoformat(timespec="seconds")
     try:
-        spec = load_spec(find_spec(opts.spec), quick=opts.quick)
+        spec = load_spec(find_spec(opts.spec), quick=opts.quick, engine=opts.engine)
         out = opts.out or default_out(spec)
         results = ResultsFile(out / "results.csv")
         done, todo, stray = plan(spec, results)

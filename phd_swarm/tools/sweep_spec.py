@@ -15,6 +15,7 @@ preset of :mod:`phd_swarm.sim.scenario`::
     duration: 250.0               # optional [s] (default: the preset's)
     metric: final                 # final | mean | median OSPA
     window: [250.0, 500.0]        # [s], for mean / median: steps with start <= k dt <= end
+    engine: central               # optional: central (default) | distributed
     scenario: {...}               # optional: other overrides (scenario_from_dict keys)
     quick: {robots: [10], trials: 2}   # overrides of the keys above for --quick
 
@@ -50,9 +51,16 @@ from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 #: Ways to reduce a trial's per-step OSPA series to one number.
 METRICS = ("final", "mean", "median")
 
+#: Engines a trial can run on: ``central`` (:class:`phd_swarm.sim.central_engine.
+#: CentralEngine`, one filter and partition for the team, several times faster) or
+#: ``distributed`` (:class:`phd_swarm.sim.engine.InMemoryEngine`, the robots' protocol
+#: message by message, bit-equal to the ROS stack). Both give the same team PHD and paths
+#: up to rounding (test/sim/test_central_engine.py).
+ENGINES = ("central", "distributed")
+
 #: Keys of a spec that ``quick:`` may override.
 OVERRIDABLE = ("figure", "description", "methods", "robots", "targets", "resolutions",
-               "trials", "base_seed", "duration", "metric", "window", "scenario")
+               "trials", "base_seed", "duration", "metric", "window", "engine", "scenario")
 
 #: Top-level keys of a spec.
 TOP_KEYS = ("preset", "name", *OVERRIDABLE, "quick")
@@ -99,7 +107,9 @@ class Trial:
         [start, end] of the mean / median window [s].
     config_hash : str
         Hash of everything the trial's result depends on (scenario, controller, metric,
-        window): a stored result is reused only if its hash matches.
+        window, engine): a stored result is reused only if its hash matches.
+    engine : str
+        One of :data:`ENGINES`.
     """
 
     method: str
@@ -113,6 +123,7 @@ class Trial:
     metric: str
     window: tuple[float, float]
     config_hash: str
+    engine: str = "central"
 
     @property
     def key(self) -> str:
@@ -162,6 +173,8 @@ class SweepSpec:
         One of :data:`METRICS`.
     window : (float, float)
         Window [s] of the mean / median OSPA (``(0, duration)`` when unset).
+    engine : str
+        One of :data:`ENGINES` (default ``central``).
     scenario : Mapping
         The ``scenario:`` overrides.
     """
@@ -182,11 +195,16 @@ class SweepSpec:
     metric: str
     window: tuple[float, float]
     scenario: Mapping[str, Any]
+    engine: str = "central"
 
     @property
     def label(self) -> str:
-        """``name`` or ``name_quick``: the default output directory's name."""
-        return f"{self.name}_quick" if self.quick else self.name
+        """The default output directory's name: ``name`` or ``name_quick``.
+
+        ``_distributed`` is appended when the trials run on the distributed engine.
+        """
+        label = f"{self.name}_quick" if self.quick else self.name
+        return label if self.engine == "central" else f"{label}_{self.engine}"
 
     @property
     def metric_label(self) -> str:
@@ -216,7 +234,8 @@ class SweepSpec:
                             out.append(Trial(label, kind, robots, targets, res, i, seed, sc,
                                              self.metric, self.window,
                                              config_hash(sc, kind, self.metric,
-                                                         self.window)))
+                                                         self.window, self.engine),
+                                             self.engine))
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -228,14 +247,14 @@ class SweepSpec:
                 "resolutions": list(self.resolutions), "trials": self.trials,
                 "base_seed": self.base_seed, "duration": self.duration,
                 "metric": self.metric, "window": list(self.window),
-                "scenario": _plain(self.scenario)}
+                "engine": self.engine, "scenario": _plain(self.scenario)}
 
 
 def config_hash(scenario: Scenario, controller: str, metric: str,
-                window: tuple[float, float]) -> str:
-    """16 hex digits of SHA-256 over the scenario's fields, the controller and the metric."""
+                window: tuple[float, float], engine: str = "central") -> str:
+    """16 hex digits of SHA-256 over the scenario's fields, controller, metric and engine."""
     doc = {"scenario": _plain(dataclasses.asdict(scenario)), "controller": controller,
-           "metric": metric, "window": [float(w) for w in window]}
+           "metric": metric, "window": [float(w) for w in window], "engine": engine}
     text = json.dumps(doc, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -413,6 +432,10 @@ def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
             if v not in METRICS:
                 raise _fail(where, key, f"expected one of {list(METRICS)}, got {v!r}")
             out[k] = v
+        elif k == "engine":
+            if v not in ENGINES:
+                raise _fail(where, key, f"expected one of {list(ENGINES)}, got {v!r}")
+            out[k] = v
         elif k == "window":
             w = _list(where, key, v, lambda n, x: _number(where, f"{prefix}{n}", x, 0.0,
                                                           False))
@@ -434,8 +457,10 @@ def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
     return out
 
 
-def load_spec(path: str | Path, quick: bool = False) -> SweepSpec:
+def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) -> SweepSpec:
     """Read and validate a spec file; ``quick`` applies its ``quick:`` block.
+
+    ``engine`` (one of :data:`ENGINES`), when given, replaces the spec's ``engine``.
 
     Every trial's scenario is built once here, for the full and the quick form, so a bad
     value fails before anything runs.
@@ -484,6 +509,10 @@ def load_spec(path: str | Path, quick: bool = False) -> SweepSpec:
     if "quick" in doc and not quick:
         # Check the quick form too, so a spec is known good in both forms.
         load_spec(path, quick=True)
+    if engine is not None:
+        if engine not in ENGINES:
+            raise SpecError(f"engine: expected one of {list(ENGINES)}, got {engine!r}")
+        form["engine"] = engine
     return _resolve(where, name, path, quick, preset, form, qkeys)
 
 
@@ -532,7 +561,8 @@ def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
         methods=form["methods"], robots=form["robots"], targets=tuple(targets),
         resolutions=tuple(float(r) for r in resolutions), trials=form["trials"],
         base_seed=form.get("base_seed", 0), duration=float(duration), metric=metric,
-        window=(float(window[0]), float(window[1])), scenario=scen)
+        window=(float(window[0]), float(window[1])), scenario=scen,
+        engine=form.get("engine", "central"))
     try:
         spec.trials_list()
     except ValueError as exc:
@@ -540,5 +570,5 @@ def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
     return spec
 
 
-__all__ = ["METRICS", "SpecError", "SweepSpec", "Trial", "config_hash", "find_spec",
+__all__ = ["ENGINES", "METRICS", "SpecError", "SweepSpec", "Trial", "config_hash", "find_spec",
            "load_spec", "sweeps_dir"]

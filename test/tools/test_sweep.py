@@ -148,6 +148,27 @@ def test_results_do_not_depend_on_the_number_of_workers(tiny, tmp_path, children
 
 
 @pytest.mark.slow
+def test_distributed_engine_gives_the_central_engines_results(tiny, tmp_path, children):
+    spec, central = tiny
+    out = tmp_path / "distributed"
+    res = _run(children, str(spec), "--workers", "2", "--engine", "distributed",
+               "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    a, b = _rows(central / "results.csv"), _rows(out / "results.csv")
+    assert a.keys() == b.keys()
+    for key in a:
+        assert (a[key]["engine"], b[key]["engine"]) == ("central", "distributed")
+        # The engine is part of what a row was computed with: no resuming across engines.
+        assert a[key]["config_hash"] != b[key]["config_hash"]
+        for c in ("value", "ospa_final", "ospa_mean_window", "expected_cardinality_final"):
+            assert float(b[key][c]) == pytest.approx(float(a[key][c]), rel=1e-9, abs=1e-12)
+        for c in ("cardinality_true_final", "cardinality_est_final", *sweep.PROTOCOL_COLUMNS):
+            assert a[key][c] == b[key][c], (key, c)
+    assert sweep.main([str(spec), "--engine", "distributed", "--out", str(central),
+                       "--dry-run"]) == 2
+
+
+@pytest.mark.slow
 def test_changed_spec_is_refused_and_plot_only_redraws(tiny, tmp_path, capsys):
     spec, first = tiny
     out = tmp_path / "copy"
@@ -216,6 +237,37 @@ def test_a_failing_trial_is_reported_not_raised():
     assert error.startswith("ValueError") and "bogus" in error
 
 
+
+def test_plan_runs_seed_by_seed_so_a_partial_sweep_is_balanced(tmp_path):
+    spec = load_spec(find_spec("dames_static"))
+    done, todo, stray = sweep.plan(spec, sweep.ResultsFile(tmp_path / "results.csv"))
+    assert (len(done), len(todo), stray) == (0, 600, 0)
+    indices = [t.index for t in todo]
+    assert indices == sorted(indices)
+    # Cut anywhere: every cell (method x robots x targets) has n or n + 1 seeds.
+    for cut in (1, 59, 60, 61, 233, 599):
+        per_cell: dict[tuple, int] = {}
+        for t in todo[:cut]:
+            cell = (t.method, t.robots, t.targets)
+            per_cell[cell] = per_cell.get(cell, 0) + 1
+        counts = [per_cell.get((t.method, t.robots, t.targets), 0) for t in todo[:60]]
+        assert max(counts) - min(counts) <= 1, cut
+    # Within a seed, the longest trials first.
+    first = [t.cost() for t in todo[:60]]
+    assert first == sorted(first, reverse=True)
+
+
+def test_full_forms_write_to_the_tracked_results_folder(monkeypatch, tmp_path):
+    full = load_spec(find_spec("chen_clustered"))
+    quick = load_spec(find_spec("chen_clustered"), quick=True)
+    monkeypatch.setenv("PHD_SWARM_ROOT", str(tmp_path))
+    assert sweep.default_out(full) == tmp_path / "results" / "sweeps" / "chen_clustered"
+    assert sweep.default_out(quick) == tmp_path / "runs" / "sweeps" / "chen_clustered_quick"
+    # results/ is in git (runs/ is not): committed rows are resumed by the next session.
+    ignored = (ROOT / ".gitignore").read_text().split()
+    assert "/runs/" in ignored and not any(p.startswith("/results") for p in ignored)
+
+
 # ------------------------------------------------------------------------------- specs
 @pytest.mark.parametrize("quick", [False, True])
 @pytest.mark.parametrize("name", ["dames_static", "dames_moving", "chen_clustered",
@@ -249,6 +301,7 @@ def test_full_specs_are_the_papers_experiments():
 
 BAD = [
     ("robotz: [1]\n", "robotz: unknown key"),
+    ("engine: ros\n", "engine: expected one of ['central', 'distributed']"),
     ("robots: ten\n", "robots: expected a list"),
     ("robots: []\n", "robots: expected a non-empty list"),
     ("robots: [2, two]\n", "robots[1]: expected an integer >= 1"),

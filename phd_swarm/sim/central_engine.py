@@ -1,0 +1,132 @@
+"""The central engine: the team's filter and controllers computed as one, for sweeps.
+
+The distributed filter (Dames 2020 Alg. 1-2) computes the centralised grid PHD filter's
+team PHD (eq. 3-6), up to the rounding of sums taken in another order
+(``test/sim/test_engine.py``): what each robot holds is the team PHD over its own cell. So
+a run of the papers' algorithms can be computed without the protocol, as the papers' own
+simulations are: one :class:`~phd_swarm.core.central.CentralPhdFilter` over the whole map,
+one partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of
+Dames eq. 7 when every power weight is 0), and each robot's controller
+(:func:`phd_swarm.core.controller.decide`) on its own cell, bins and masses. Chen's
+cumulative state (eq. 9-10) is counted per bin: alpha and n are whole numbers, so they are
+exactly those the robots carry.
+
+One step k, as in :class:`~phd_swarm.sim.engine.InMemoryEngine`:
+
+1. the world gives each live robot its measurement set Z^k at its position q^k;
+2. the filter predicts (eq. 3) and updates with the sets in increasing robot id (eq. 4-6,
+   Alg. 2 line 10); every scan counts one observation of the bins in its field of view,
+   and a reward there if it holds a measurement (Chen eq. 9-10);
+3. the cells of q^k with the power weights of the previous decisions partition the bins
+   (ties to the lower robot id, as in :func:`~phd_swarm.core.partition.assign_bins`), and
+   each robot decides its goal and next power weight;
+4. the world moves the robots toward their goals and the targets, to step k+1.
+
+What it leaves out is what only the protocol has: messages, failures and the counters of
+partitions that disagree (a missed neighbour, docs/protocol.md). It runs a step several
+times faster than the distributed engine; ``test/sim/test_central_engine.py`` shows that
+both give the same team PHD and the same robot paths.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.controller import ControllerConfig, decide
+from phd_swarm.core.partition import bin_owners, cells
+from phd_swarm.core.scan import Scan
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.world import World
+
+
+class CentralEngine:
+    """Run a scenario with one central filter and the robots' controllers, in one process.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Map, models, team, targets, duration, seed.
+    controller : ControllerConfig or str
+        Controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``) or full config.
+    """
+
+    def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd") -> None:
+        self.scenario = scenario
+        if isinstance(controller, str):
+            controller = ControllerConfig(kind=controller,
+                                          rho_max=scenario.models.detection.radius)
+        self.controller = controller
+        self.grid = scenario.grid
+        self.world = World(scenario)
+        self.filter = CentralPhdFilter(self.grid, scenario.models)
+        ids = self.world.robot_ids
+        self.power_weights = np.zeros(len(ids))
+        self.cumulative = controller.uses_cumulative
+        self.alpha = np.zeros(self.grid.size) if self.cumulative else None
+        self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
+        self.cells: list[np.ndarray] = []
+        self.owners = np.empty(0, dtype=np.int64)
+        self.goals = np.empty((0, 2))
+
+    @property
+    def step_index(self) -> int:
+        """Index of the next step to run."""
+        return self.world.step_index
+
+    def step(self) -> None:
+        """Run one full step (scan, filter, partition and control, world motion)."""
+        world, grid = self.world, self.grid
+        k = world.step_index
+        scans = world.scans()
+        ids = world.robot_ids
+        positions = world.robot_positions
+        empty = np.empty((0, 2))
+        ordered = [Scan(int(rid), k, positions[r], scans.get(int(rid), empty))
+                   for r, rid in enumerate(ids.tolist()) if int(rid) in scans]
+        self.filter.step(ordered)
+        if self.cumulative:
+            self._count_observations(ordered)
+        rho = self.power_weights
+        self.cells = cells(grid.env, positions, rho)
+        self.owners = bin_owners(grid, positions, rho)
+        order = np.argsort(self.owners, kind="stable")
+        starts = np.searchsorted(self.owners[order], np.arange(len(ids) + 1))
+        w = self.filter.weights.reshape(-1)
+        goals = {}
+        goal_rows = np.empty((len(ids), 2))
+        for r, rid in enumerate(ids.tolist()):
+            rid = int(rid)
+            if rid not in scans:
+                goal_rows[r] = positions[r]
+                continue
+            bins = order[starts[r]:starts[r + 1]]
+            d = decide(self.controller, grid, positions[r], self.cells[r], bins, w[bins],
+                       len(scans[rid]) > 0,
+                       None if self.alpha is None else self.alpha[bins],
+                       None if self.count is None else self.count[bins])
+            goals[rid] = d.goal
+            goal_rows[r] = d.goal
+            self.power_weights[r] = d.power_weight
+        self.goals = goal_rows
+        world.apply_goals(goals)
+        world.advance()
+
+    def _count_observations(self, scans: list[Scan]) -> None:
+        """Chen eq. 9-10: one observation per scan of each bin in its field of view."""
+        radius = self.scenario.models.detection.radius
+        for scan in scans:
+            fov = self.grid.disk_bins(scan.sensor, radius)
+            self.count[fov] += 1
+            if len(scan.z):
+                self.alpha[fov] += 1.0
+
+    def run(self, steps: int | None = None) -> None:
+        """Run ``steps`` steps (default: the rest of the scenario)."""
+        n = self.scenario.steps - self.world.step_index if steps is None else steps
+        for _ in range(n):
+            self.step()
+
+    def team_weights(self) -> np.ndarray:
+        """The team PHD as an image (ny, nx)."""
+        return np.array(self.filter.weights)

@@ -1,0 +1,72 @@
+"""The central engine runs the same team as the distributed one, up to rounding."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from phd_swarm.core.controller import ControllerConfig
+from phd_swarm.sim import scenario as sc
+from phd_swarm.sim.central_engine import CentralEngine
+from phd_swarm.sim.engine import InMemoryEngine
+
+STEPS = 120
+
+
+def _chen_o(mode: str) -> ControllerConfig:
+    return ControllerConfig(kind="chen_o", rho_max=5.0, cumulative_mode=mode)
+
+
+CASES = {
+    "dames_static_phd": (sc.dames_static(robots=20, targets=30), "phd"),
+    "dames_static_uniform": (sc.dames_static(robots=20, targets=30), "uniform"),
+    "dames_moving_phd": (sc.dames_moving(robots=15, targets=20), "phd"),
+    "chen_p": (sc.chen_clustered(robots=20, resolution=1.0), "chen_p"),
+    "chen_o": (sc.chen_clustered(robots=20, resolution=1.0), _chen_o("rate")),
+    "chen_o_laplace": (sc.chen_clustered(robots=20, resolution=1.0), _chen_o("laplace")),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CASES))
+def test_central_engine_follows_the_distributed_one(name):
+    scenario, controller = CASES[name]
+    scenario = scenario.with_overrides(seed=4)
+    dist = InMemoryEngine(scenario, controller)
+    cent = CentralEngine(scenario, controller)
+    moved = 0.0
+    for k in range(STEPS):
+        before = cent.world.robot_positions.copy()
+        dist.step()
+        cent.step()
+        team, ref = dist.team_weights(), cent.team_weights()
+        err = float(np.abs(team - ref).max() / ref.sum())
+        assert err <= 1e-9, f"step {k}: team PHD differs by {err:.3e} x total mass"
+        gap = float(np.abs(dist.world.robot_positions - cent.world.robot_positions).max())
+        assert gap <= 1e-9, f"step {k}: robot positions differ by {gap:.3e} m"
+        # Every robot owns in the distributed engine what the central partition gives it.
+        for r, rid in enumerate(cent.world.robot_ids.tolist()):
+            robot = dist.robots[rid]
+            assert np.array_equal(robot.bins, np.flatnonzero(cent.owners == r)), (k, rid)
+            if robot.alpha is not None:
+                # Chen eq. 9-10: whole numbers, so exactly equal.
+                assert np.array_equal(robot.alpha, cent.alpha[robot.bins]), (k, rid)
+                assert np.array_equal(robot.count, cent.count[robot.bins]), (k, rid)
+            assert dist.power_weights[rid] == pytest.approx(cent.power_weights[r],
+                                                            rel=1e-9, abs=1e-12)
+        moved += float(np.abs(cent.world.robot_positions - before).max())
+    assert moved > 10.0, "the team moved: the comparison covers the controllers"
+    if isinstance(controller, ControllerConfig) or controller == "chen_p":
+        assert np.any(cent.power_weights > 0), "power cells were exercised"
+
+
+def test_central_engine_runs_a_scenario_to_its_end():
+    scenario = sc.dames_static(robots=5, targets=8).with_overrides(duration=5.0, seed=1)
+    engine = CentralEngine(scenario, "phd")
+    engine.run()
+    assert engine.step_index == scenario.steps
+    assert engine.team_weights().shape == scenario.grid.shape
+    assert len(engine.cells) == 5 and engine.goals.shape == (5, 2)
+    # The partition covers every bin once and gives each robot its own cell's bins.
+    assert engine.owners.shape == (scenario.grid.size,)
+    assert set(np.unique(engine.owners).tolist()) <= set(range(5))
