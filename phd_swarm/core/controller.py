@@ -15,6 +15,7 @@ Alg. 1 computes the cell from the weights the robots exchange with their states)
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,7 +70,8 @@ class Decision:
     power_weight: float
 
 
-def decide(config: ControllerConfig, grid: Grid, position: np.ndarray, cell: np.ndarray,
+def decide(config: ControllerConfig, grid: Grid, position: np.ndarray,
+           cell: np.ndarray | Callable[[], np.ndarray],
            bins: np.ndarray, phd: np.ndarray, has_measurement: bool,
            alpha: np.ndarray | None = None, count: np.ndarray | None = None) -> Decision:
     """Goal (weighted centroid of the own bins, Dames eq. 8 / Chen eq. 2) and next rho.
@@ -80,8 +82,9 @@ def decide(config: ControllerConfig, grid: Grid, position: np.ndarray, cell: np.
     grid : Grid
     position : np.ndarray, shape (2,)
         Robot position q [m].
-    cell : np.ndarray, shape (V, 2)
-        Own cell polygon (fallback centroid when the weight is zero).
+    cell : np.ndarray, shape (V, 2), or a callable returning it
+        Own cell polygon (fallback centroid when the weight is zero; a callable is called
+        only then).
     bins : np.ndarray of int, shape (K,)
         Bins the robot owns.
     phd : np.ndarray, shape (K,)

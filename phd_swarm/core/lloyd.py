@@ -14,6 +14,7 @@ The weighting function phi is one of (Dames Sec. II-C and IV, Chen Alg. 1):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from enum import StrEnum
 
 import numpy as np
@@ -38,7 +39,7 @@ def _as_point(name: str, value: np.ndarray) -> np.ndarray:
 
 
 def weighted_centroid(centres: np.ndarray, weights: np.ndarray,
-                      fallback: np.ndarray) -> np.ndarray:
+                      fallback: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
     """Weighted centroid sum_k w_k x_k / sum_k w_k over bins (Dames eq. 8, Chen eq. 2).
 
     The bin-centre rule turns the integrals of eq. 8 into sums: with masses w_k (e.g. the
@@ -50,10 +51,10 @@ def weighted_centroid(centres: np.ndarray, weights: np.ndarray,
         Bin centres x_k [m]; K may be 0.
     weights : np.ndarray, shape (K,)
         Non-negative weights w_k (any unit; only ratios matter).
-    fallback : np.ndarray, shape (2,)
+    fallback : np.ndarray, shape (2,), or a callable returning one
         Returned when K = 0 or all w_k = 0, where eq. 8 is undefined. Callers pass the
         geometric centroid of the cell (:func:`centroid_goal` does), which is what a
-        uniform weighting would give.
+        uniform weighting would give. A callable is called only then.
 
     Returns
     -------
@@ -68,7 +69,7 @@ def weighted_centroid(centres: np.ndarray, weights: np.ndarray,
     """
     x = np.asarray(centres, dtype=float).reshape(-1, 2)
     w = np.asarray(weights, dtype=float).reshape(-1)
-    fb = _as_point("fallback", fallback)
+    fb = None if callable(fallback) else _as_point("fallback", fallback)
     if w.shape[0] != x.shape[0]:
         raise ValueError(f"got {w.shape[0]} weights for {x.shape[0]} bin centres")
     if not np.all(np.isfinite(w)):
@@ -76,7 +77,7 @@ def weighted_centroid(centres: np.ndarray, weights: np.ndarray,
     if np.any(w < 0):
         raise ValueError(f"centroid weights must be non-negative; the smallest is {w.min()}")
     if x.shape[0] == 0 or not w.max() > 0:
-        return fb.copy()
+        return _as_point("fallback", fallback()) if fb is None else fb.copy()
     # PHD masses of long-observed empty bins decay geometrically into the subnormal range,
     # where w @ x underflows; scaling by the largest weight keeps the ratio exact enough.
     w = w / w.max()
@@ -84,7 +85,8 @@ def weighted_centroid(centres: np.ndarray, weights: np.ndarray,
 
 
 def centroid_goal(grid: Grid, owned_flat_idx: np.ndarray, weights_of_owned: np.ndarray,
-                  cell_polygon: np.ndarray, position: np.ndarray) -> np.ndarray:
+                  cell_polygon: np.ndarray | Callable[[], np.ndarray],
+                  position: np.ndarray) -> np.ndarray:
     """Lloyd goal of one robot: the weighted centroid of the bins it owns (Dames eq. 8).
 
     Falls back, in order, to the area centroid of ``cell_polygon`` when the weights sum to
@@ -99,8 +101,9 @@ def centroid_goal(grid: Grid, owned_flat_idx: np.ndarray, weights_of_owned: np.n
         Flat indices of the bins the robot owns.
     weights_of_owned : np.ndarray, shape (K,)
         phi at those bins, >= 0 (see :func:`lloyd_weights`).
-    cell_polygon : np.ndarray, shape (V, 2)
-        The robot's cell [m]; (0, 2) if empty.
+    cell_polygon : np.ndarray, shape (V, 2), or a callable returning it
+        The robot's cell [m]; (0, 2) if empty. A callable is called only when the
+        fallback is needed (a caller that has no polygon at hand computes it then).
     position : np.ndarray, shape (2,)
         The robot's position q [m].
 
@@ -110,8 +113,12 @@ def centroid_goal(grid: Grid, owned_flat_idx: np.ndarray, weights_of_owned: np.n
         Goal g [m].
     """
     q = _as_point("position", position)
-    poly = np.asarray(cell_polygon, dtype=float).reshape(-1, 2)
-    fallback = polygon_centroid(poly) if polygon_area(poly) > 0 else q
+
+    def fallback() -> np.ndarray:
+        poly = cell_polygon() if callable(cell_polygon) else cell_polygon
+        poly = np.asarray(poly, dtype=float).reshape(-1, 2)
+        return polygon_centroid(poly) if polygon_area(poly) > 0 else q
+
     idx = np.asarray(owned_flat_idx, dtype=np.int64).reshape(-1)
     return weighted_centroid(grid.centres_of(idx), weights_of_owned, fallback)
 

@@ -30,11 +30,13 @@ both give the same team PHD and the same robot paths.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from phd_swarm.core.central import CentralPhdFilter
 from phd_swarm.core.controller import ControllerConfig, decide
-from phd_swarm.core.partition import bin_owners, cells
+from phd_swarm.core.partition import bin_owners, cell_of
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.world import World
@@ -65,8 +67,8 @@ class CentralEngine:
         self.cumulative = controller.uses_cumulative
         self.alpha = np.zeros(self.grid.size) if self.cumulative else None
         self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
-        self.cells: list[np.ndarray] = []
         self.owners = np.empty(0, dtype=np.int64)
+        self._generators = (np.empty((0, 2)), np.empty(0))
         self.goals = np.empty((0, 2))
 
     @property
@@ -87,8 +89,8 @@ class CentralEngine:
         self.filter.step(ordered)
         if self.cumulative:
             self._count_observations(ordered)
-        rho = self.power_weights
-        self.cells = cells(grid.env, positions, rho)
+        rho = self.power_weights.copy()
+        self._generators = (positions.copy(), rho)
         self.owners = bin_owners(grid, positions, rho)
         order = np.argsort(self.owners, kind="stable")
         starts = np.searchsorted(self.owners[order], np.arange(len(ids) + 1))
@@ -101,8 +103,10 @@ class CentralEngine:
                 goal_rows[r] = positions[r]
                 continue
             bins = order[starts[r]:starts[r + 1]]
-            d = decide(self.controller, grid, positions[r], self.cells[r], bins, w[bins],
-                       len(scans[rid]) > 0,
+            # The polygon is only needed where the weights of the bins are all 0 (the
+            # centroid's fallback): computed then.
+            d = decide(self.controller, grid, positions[r], partial(self.cell, r), bins,
+                       w[bins], len(scans[rid]) > 0,
                        None if self.alpha is None else self.alpha[bins],
                        None if self.count is None else self.count[bins])
             goals[rid] = d.goal
@@ -111,6 +115,15 @@ class CentralEngine:
         self.goals = goal_rows
         world.apply_goals(goals)
         world.advance()
+
+    def cell(self, row: int) -> np.ndarray:
+        """The cell polygon (V, 2) of the robot in ``row`` at the last step.
+
+        A power cell (Chen eq. 12-13), or a Voronoi cell (Dames eq. 7) when every power
+        weight is 0; (0, 2) if empty.
+        """
+        positions, rho = self._generators
+        return cell_of(self.scenario.grid.env, row, positions, rho)[0]
 
     def _count_observations(self, scans: list[Scan]) -> None:
         """Chen eq. 9-10: one observation per scan of each bin in its field of view."""

@@ -179,3 +179,20 @@ def test_lloyd_iterations_do_not_increase_the_discrete_cost():
             for r in range(len(q))])
     assert all(b <= a * (1 + 1e-12) for a, b in zip(costs, costs[1:], strict=False))
     assert costs[-1] < 0.5 * costs[0]
+
+
+def test_a_lazy_cell_is_computed_only_for_the_fallback():
+    calls = []
+
+    def cell():
+        calls.append(1)
+        return SQUARE
+
+    q = np.array([1.0, 1.0])
+    idx = np.arange(4)
+    assert np.array_equal(centroid_goal(GRID, idx, np.ones(4), cell, q),
+                          centroid_goal(GRID, idx, np.ones(4), SQUARE, q))
+    assert calls == []
+    np.testing.assert_array_equal(centroid_goal(GRID, idx, np.zeros(4), cell, q),
+                                  centroid_goal(GRID, idx, np.zeros(4), SQUARE, q))
+    assert calls == [1]

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core.controller import ControllerConfig
+from phd_swarm.core.partition import cells, points_in_polygon
 from phd_swarm.sim import scenario as sc
 from phd_swarm.sim.central_engine import CentralEngine
 from phd_swarm.sim.engine import InMemoryEngine
@@ -66,7 +67,14 @@ def test_central_engine_runs_a_scenario_to_its_end():
     engine.run()
     assert engine.step_index == scenario.steps
     assert engine.team_weights().shape == scenario.grid.shape
-    assert len(engine.cells) == 5 and engine.goals.shape == (5, 2)
-    # The partition covers every bin once and gives each robot its own cell's bins.
+    assert engine.goals.shape == (5, 2)
     assert engine.owners.shape == (scenario.grid.size,)
     assert set(np.unique(engine.owners).tolist()) <= set(range(5))
+    # The cells, computed on demand, are those of the whole diagram at the last step, and
+    # hold the bins the partition gives their robots.
+    positions, rho = engine._generators
+    polys = cells(scenario.grid.env, positions, rho)
+    for r in range(5):
+        np.testing.assert_array_equal(engine.cell(r), polys[r])
+        owned = scenario.grid.centres_of(np.flatnonzero(engine.owners == r))
+        assert points_in_polygon(owned, polys[r], 1e-9).all()
