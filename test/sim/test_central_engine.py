@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from phd_swarm.core import phd_grid
 from phd_swarm.core.controller import ControllerConfig
 from phd_swarm.core.partition import cells, points_in_polygon
 from phd_swarm.sim import scenario as sc
@@ -59,6 +60,25 @@ def test_central_engine_follows_the_distributed_one(name):
     assert moved > 10.0, "the team moved: the comparison covers the controllers"
     if isinstance(controller, ControllerConfig) or controller == "chen_p":
         assert np.any(cent.power_weights > 0), "power cells were exercised"
+
+
+@pytest.mark.slow
+def test_at_an_fft_kernel_both_engines_keep_the_same_paths():
+    # Chen at 0.1 m: a 29 x 29 kernel, convolved by FFT. The central engine spreads each
+    # cell's bins in their own box as the robots do, and FFT round-off is cut at the same
+    # floor, so searched-out cells (every mass tiny) steer the same way in both engines.
+    scenario = sc.chen_clustered(robots=20, resolution=0.1).with_overrides(seed=2)
+    assert scenario.models.motion.kernel(0.1).size > phd_grid.DIRECT_MAX_TAPS
+    dist = InMemoryEngine(scenario, "chen_p")
+    cent = CentralEngine(scenario, "chen_p")
+    for k in range(10):
+        dist.step()
+        cent.step()
+        ref = cent.team_weights()
+        err = float(np.abs(dist.team_weights() - ref).max() / ref.sum())
+        assert err <= 1e-9, f"step {k}: team PHD differs by {err:.3e} x total mass"
+        gap = float(np.abs(dist.world.robot_positions - cent.world.robot_positions).max())
+        assert gap <= 1e-6, f"step {k}: robot positions differ by {gap:.3e} m"
 
 
 def test_central_engine_runs_a_scenario_to_its_end():
