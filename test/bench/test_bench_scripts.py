@@ -44,3 +44,17 @@ def test_bench_comms_quick_reports_traffic_per_team_size(tmp_path):
         assert r["by_type_per_robot_per_step"]["RobotState"] > 0
         # A robot never hears from more robots than the team has, per message type.
         assert r["by_type_per_robot_per_step"]["RobotState"] <= r["robots"] - 1
+
+
+def test_bench_engines_quick_compares_the_two_engines(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "engines", "--quick",
+                             "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "central" in result.stdout and "dames_static PHD 10 robots" in result.stdout
+    data = json.loads(next(tmp_path.glob("engines-*.json")).read_text())
+    assert len(data["results"]) == 2
+    for r in data["results"]:
+        assert r["distributed_steps_per_s"] > 0 and r["central_steps_per_s"] > 0
+        # Same trial, same steps: the two engines agree (tests bound this at every step).
+        assert r["max_phd_difference_rel"] <= 1e-9 and r["max_position_difference_m"] <= 1e-9
