@@ -217,6 +217,13 @@ def _grid(n: int, width: float, height: float) -> tuple[Figure, list]:
     return fig, axes[:n]
 
 
+def trials_per_box(grouped: dict[tuple, list], trials: int) -> str:
+    """``10 trials per box``, or ``3-4 trials per box (of 10)`` for a sweep not finished."""
+    sizes = sorted({len(rs) for rs in grouped.values()}) or [0]
+    n = f"{sizes[0]}" if len(sizes) == 1 else f"{sizes[0]}-{sizes[-1]}"
+    return f"{n} trials per box" + ("" if sizes == [trials] else f" (of {trials})")
+
+
 def plot_boxes(spec: SweepSpec, rows: Sequence[dict[str, Any]], path: Path) -> Path:
     """The metric per cell as grouped box plots (Dames Fig. 2/5, Chen Fig. 3a)."""
     grouped = cells(rows)
@@ -257,7 +264,7 @@ def plot_boxes(spec: SweepSpec, rows: Sequence[dict[str, Any]], path: Path) -> P
     handles = [Patch(facecolor=COLOURS[j % len(COLOURS)], alpha=0.45,
                      label=f"{m} ({spec.methods[m]})") for j, m in enumerate(methods)]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(methods))
-    fig.suptitle(f"{spec.figure}\n{spec.label}, {spec.trials} trials per box",
+    fig.suptitle(f"{spec.figure}\n{spec.label}, {trials_per_box(grouped, spec.trials)}",
                  fontsize="medium")
     fig.savefig(path, dpi=110)
     return path

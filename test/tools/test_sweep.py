@@ -380,3 +380,13 @@ def test_bad_spec_exits_2_before_any_trial(tmp_path, capsys):
     path.write_text(TINY)
     assert sweep.main([str(path), "--quick", "--dry-run", "--out", str(out)]) == 0
     assert "2 trials" in capsys.readouterr().out
+
+
+def test_box_plot_title_says_how_many_trials_each_box_holds():
+    from phd_swarm.tools.sweep_plots import trials_per_box
+
+    assert trials_per_box({("PHD", 10): [1] * 10, ("PHD", 20): [1] * 10}, 10) == \
+        "10 trials per box"
+    assert trials_per_box({("PHD", 10): [1] * 4, ("PHD", 20): [1] * 3}, 10) == \
+        "3-4 trials per box (of 10)"
+    assert trials_per_box({}, 10) == "0 trials per box (of 10)"
