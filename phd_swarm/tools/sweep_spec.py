@@ -134,13 +134,17 @@ class Trial:
     def cost(self) -> float:
         """Rough relative cost [a.u.], for scheduling the longest first and for the ETA.
 
-        Fitted to engine timings on this project's 2-core machine: time per step grows as
-        about ``robots**1.2``, ~1.7x for Chen's scenario (5 m/s robots, clustered targets),
-        ~1.3x at 0.5 m bins and ~6x at 0.1 m bins against 1 m.
+        Fitted to engine timings on this project's 2-core machine. Distributed engine:
+        time per step grows as about ``robots**1.2``, ~1.7x for Chen's scenario (5 m/s
+        robots, clustered targets), ~1.3x at 0.5 m bins and ~6x at 0.1 m bins against 1 m.
+        Central engine (2026-12-01): about ``robots**0.7`` (79 steps/s with 50 robots, 52
+        with 100), ~1.4x for Chen's scenario, and 1 : 1.4 : 19 at 1 m, 0.5 m and 0.1 m.
         """
-        bins = 1.0 + 5.0 * (min(1.0, self.resolution) ** -2) / 100.0
+        inv_area = min(1.0, self.resolution) ** -2
         kind = 1.7 if self.scenario.targets.kind == "clustered_walk" else 1.0
-        return self.scenario.steps * self.robots ** 1.2 * bins * kind
+        if self.engine == "central":
+            return self.scenario.steps * self.robots ** 0.7 * (1.0 + 0.18 * inv_area) * kind
+        return self.scenario.steps * self.robots ** 1.2 * (1.0 + 0.05 * inv_area) * kind
 
 
 @dataclass(frozen=True)
