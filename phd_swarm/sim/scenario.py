@@ -25,6 +25,9 @@ from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
 from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
+#: Side of the extraction window [m]: Dames' 3 x 3 bins of 1 m (Sec. IV).
+EXTRACTION_WINDOW_M = 3.0
+
 Box = tuple[float, float, float, float]
 
 TARGET_KINDS = ("static", "dames_walk", "clustered_walk")
@@ -275,8 +278,14 @@ class Scenario:
 
     @property
     def extraction(self) -> ExtractionConfig:
-        """Extraction settings: :attr:`extraction_threshold` per m^2, Dames' 3-bin window."""
-        return ExtractionConfig(threshold_per_m2=float(self.extraction_threshold))
+        """Extraction settings: :attr:`extraction_threshold` per m^2 in a 3 m window.
+
+        Dames' window of 3 bins of 1 m, kept in metres (:data:`EXTRACTION_WINDOW_M`) so that
+        the estimator is the same at every grid resolution: at 0.1 m a 3-bin window finds
+        several maxima on one target's peak (docs/decisions.md).
+        """
+        return ExtractionConfig(threshold_per_m2=float(self.extraction_threshold),
+                                neighbourhood_m=EXTRACTION_WINDOW_M)
 
     def with_overrides(self, **changes: Any) -> Scenario:
         """A copy with some fields replaced (``dataclasses.replace``), validated again."""

@@ -171,3 +171,14 @@ def test_birth_heading_is_read_from_the_config_and_checked():
     assert sc.targets.birth_heading == "uniform"
     with pytest.raises(ValueError, match="targets.birth_heading must be one of"):
         scenario_from_dict({"preset": "dames_moving", "targets": {"birth_heading": "north"}})
+
+
+def test_extraction_keeps_its_window_and_threshold_in_metres():
+    # Dames: 3 x 3 bins of 1 m and 0.05 per bin. At 0.1 m a 3-bin window would find
+    # several maxima on one target's peak, so the window stays 3 m.
+    for res, bins in ((1.0, 3), (0.5, 7), (0.1, 31)):
+        s = chen_clustered(robots=10, resolution=res)
+        assert s.extraction.window_bins(s.grid) == bins
+        assert s.extraction.bin_threshold(s.grid) == pytest.approx(0.05 * res ** 2)
+    s = dames_static()
+    assert (s.extraction.window_bins(s.grid), s.extraction.bin_threshold(s.grid)) == (3, 0.05)
