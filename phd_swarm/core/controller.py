@@ -62,6 +62,16 @@ class ControllerConfig:
         return self.kind in ("chen_p", "chen_o")
 
 
+def as_controller(controller: ControllerConfig | str, rho_max: float) -> ControllerConfig:
+    """``controller`` itself, or a bare kind (``phd``, ...) as a config with ``rho_max``.
+
+    The engines take either; a kind gets the scenario's sensing radius as ``rho_max``.
+    """
+    if isinstance(controller, str):
+        return ControllerConfig(kind=controller, rho_max=rho_max)
+    return controller
+
+
 @dataclass(frozen=True)
 class Decision:
     """A robot's goal for the next move and its power weight for the next partition."""

@@ -37,7 +37,7 @@ import numpy as np
 
 from phd_swarm.core import phd_grid
 from phd_swarm.core.central import CentralPhdFilter
-from phd_swarm.core.controller import ControllerConfig, decide
+from phd_swarm.core.controller import ControllerConfig, as_controller, decide
 from phd_swarm.core.partition import bin_owners, cell_of
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
@@ -57,10 +57,8 @@ class CentralEngine:
 
     def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd") -> None:
         self.scenario = scenario
-        if isinstance(controller, str):
-            controller = ControllerConfig(kind=controller,
-                                          rho_max=scenario.models.detection.radius)
-        self.controller = controller
+        self.controller = controller = as_controller(controller,
+                                                     scenario.models.detection.radius)
         self.grid = scenario.grid
         self.world = World(scenario)
         self.filter = CentralPhdFilter(self.grid, scenario.models)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from phd_swarm.core.central import CentralPhdFilter
-from phd_swarm.core.controller import ControllerConfig, decide
+from phd_swarm.core.controller import ControllerConfig, as_controller, decide
 from phd_swarm.core.protocol.messages import Envelope, Message, TransferKind, TransferMsg
 from phd_swarm.core.protocol.robot import FilterContext, RobotFilter
 from phd_swarm.core.scan import Scan
@@ -81,10 +81,8 @@ class InMemoryEngine:
                  delivery_seed: int | None = None, reference: bool = False,
                  timeout_ticks: int = 3) -> None:
         self.scenario = scenario
-        if isinstance(controller, str):
-            controller = ControllerConfig(kind=controller,
-                                          rho_max=scenario.models.detection.radius)
-        self.controller = controller
+        self.controller = controller = as_controller(controller,
+                                                     scenario.models.detection.radius)
         self.grid = scenario.grid
         self.world = World(scenario)
         self.ctx = FilterContext(self.grid, scenario.models,
