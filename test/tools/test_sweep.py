@@ -390,3 +390,19 @@ def test_box_plot_title_says_how_many_trials_each_box_holds():
     assert trials_per_box({("PHD", 10): [1] * 4, ("PHD", 20): [1] * 3}, 10) == \
         "3-4 trials per box (of 10)"
     assert trials_per_box({}, 10) == "0 trials per box (of 10)"
+
+
+@pytest.mark.parametrize("folder", sorted(p.name for p in (ROOT / "results" / "sweeps").glob("*")
+                                          if (p / "results.csv").exists()))
+def test_committed_results_belong_to_their_specs(folder):
+    # The full forms' rows are in git so that later sessions resume them: a change to a
+    # spec or a preset that would orphan them (or mix them with new ones) fails here.
+    out = ROOT / "results" / "sweeps" / folder
+    spec = load_spec(find_spec(folder))
+    results = sweep.ResultsFile(out / "results.csv")
+    done, todo, stray = sweep.plan(spec, results)
+    assert stray == 0 and len(done) == len(results.rows) > 0
+    for trial in done[:5]:
+        series = sweep.load_series(out / "series" / f"{trial.key}.npz")
+        assert str(series["config_hash"]) == trial.config_hash
+        assert len(series["ospa"]) == trial.scenario.steps
