@@ -217,6 +217,23 @@ def _grid(n: int, width: float, height: float) -> tuple[Figure, list]:
     return fig, axes[:n]
 
 
+def legend_columns(labels: Sequence[str], fig_width_in: float) -> int:
+    """Columns of a legend under the figure: one row if it fits the figure's width, else more.
+
+    An entry takes about 0.075 in per character of its label at the default font size, plus
+    0.6 in for its patch and padding.
+    """
+    widths = [0.075 * len(label) + 0.6 for label in labels]
+    for ncols in range(len(labels), 1, -1):
+        nrows = -(-len(labels) // ncols)  # matplotlib fills the columns first
+        if (ncols - 1) * nrows >= len(labels):
+            continue  # would leave a column empty: the same layout as fewer columns
+        columns = [widths[i * nrows:(i + 1) * nrows] for i in range(ncols)]
+        if sum(max(c) for c in columns if c) <= fig_width_in:
+            return ncols
+    return 1
+
+
 def trials_per_box(grouped: dict[tuple, list], trials: int) -> str:
     """``10 trials per box``, or ``3-4 trials per box (of 10)`` for a sweep not finished."""
     sizes = sorted({len(rs) for rs in grouped.values()}) or [0]
@@ -263,7 +280,8 @@ def plot_boxes(spec: SweepSpec, rows: Sequence[dict[str, Any]], path: Path) -> P
             ax.set_title(title)
     handles = [Patch(facecolor=COLOURS[j % len(COLOURS)], alpha=0.45,
                      label=f"{m} ({spec.methods[m]})") for j, m in enumerate(methods)]
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(methods))
+    fig.legend(handles=handles, loc="outside lower center",
+               ncols=legend_columns([h.get_label() for h in handles], fig.get_figwidth()))
     fig.suptitle(f"{spec.figure}\n{spec.label}, {trials_per_box(grouped, spec.trials)}",
                  fontsize="medium")
     fig.savefig(path, dpi=110)

@@ -392,6 +392,30 @@ def test_box_plot_title_says_how_many_trials_each_box_holds():
     assert trials_per_box({}, 10) == "0 trials per box (of 10)"
 
 
+@pytest.mark.parametrize(("labels", "width", "ncols"), [
+    (["D (phd)", "P (chen_p)", "O (chen_o)"], 5.5, 3),
+    (["D (phd)", "P (chen_p)", "O (chen_o)", "O_laplace (chen_o(cumulative_mode=laplace))"],
+     5.5, 2),
+    (["PHD (phd)", "uniform (uniform)"], 16.5, 2),
+])
+def test_box_plot_legend_fits_under_the_figure(labels, width, ncols):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    from phd_swarm.tools.sweep_plots import legend_columns
+
+    assert legend_columns(labels, width) == ncols
+    fig = Figure(figsize=(width, 3.6), layout="constrained")
+    canvas = FigureCanvasAgg(fig)
+    fig.subplots()
+    legend = fig.legend(handles=[Patch(label=x) for x in labels], loc="outside lower center",
+                        ncols=ncols)
+    canvas.draw()
+    box = legend.get_window_extent(canvas.get_renderer())
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.x1, (box, fig.bbox)
+
+
 @pytest.mark.parametrize("folder", sorted(p.name for p in (ROOT / "results" / "sweeps").glob("*")
                                           if (p / "results.csv").exists()))
 def test_committed_results_belong_to_their_specs(folder):
