@@ -198,7 +198,8 @@ def _panels(spec: SweepSpec) -> tuple[str, list[Any], list[dict[str, Any]]]:
 def _panel_title(panel: dict[str, Any], spec: SweepSpec) -> str:
     parts = []
     if "targets" in panel and (len(spec.targets) > 1 or spec.preset != "chen_clustered"):
-        parts.append(f"{panel['targets']} targets")
+        births = spec.base_scenario().targets.birth  # then the count is the initial one
+        parts.append(f"{panel['targets']} {'initial ' if births else ''}targets")
     if "resolution" in panel and len(spec.resolutions) > 1:
         parts.append(f"{panel['resolution']:g} m grid")
     if "robots" in panel:
@@ -344,12 +345,7 @@ def plot_time(spec: SweepSpec, rows: Sequence[dict[str, Any]], series_dir: Path,
             if what == "ospa":
                 ax.set_ylim(bottom=0)
             ax.grid(alpha=0.3)
-            parts = []
-            if len(spec.targets) > 1 or spec.preset != "chen_clustered":
-                parts.append(f"{targets} targets")
-            if len(spec.resolutions) > 1:
-                parts.append(f"{res:g} m grid")
-            ax.set_title(", ".join(parts) or None)
+            ax.set_title(_panel_title({"targets": targets, "resolution": res}, spec) or None)
             ax.legend(fontsize="small")
         teams = ", ".join(str(r) for r in spec.robots)
         fig.suptitle(f"{spec.figure}\n{spec.label}: mean over all trials and team sizes "

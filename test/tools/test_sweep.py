@@ -392,6 +392,15 @@ def test_box_plot_title_says_how_many_trials_each_box_holds():
     assert trials_per_box({}, 10) == "0 trials per box (of 10)"
 
 
+def test_panel_titles_say_initial_targets_when_targets_are_born():
+    from phd_swarm.tools.sweep_plots import _panel_title
+    from phd_swarm.tools.sweep_spec import find_spec, load_spec
+
+    moving, static = (load_spec(find_spec(n)) for n in ("dames_moving", "dames_static"))
+    assert _panel_title({"targets": 20}, moving) == "20 initial targets"
+    assert _panel_title({"targets": 30}, static) == "30 targets"
+
+
 @pytest.mark.parametrize(("labels", "width", "ncols"), [
     (["D (phd)", "P (chen_p)", "O (chen_o)"], 5.5, 3),
     (["D (phd)", "P (chen_p)", "O (chen_o)", "O_laplace (chen_o(cumulative_mode=laplace))"],
