@@ -40,6 +40,9 @@ from phd_swarm.sim.scenario import Scenario, scenario_from_dict
 NODE_KEYS = {"world": "world", "/**/robot": "robot", "monitor": "monitor",
              "recorder": "recorder"}
 SHARED_KEY = "/**"
+
+#: World ``step_timeout`` >= this many robot ``tick_period`` s (:meth:`RunConfig.checked`).
+LIVENESS_PERIODS = 3
 _SHARED_EXTRA = ("use_sim_time", "scenario")
 
 
@@ -142,7 +145,24 @@ class RunConfig:
                     raise ValueError(f"{kind}: unknown parameter {name!r}")
                 nodes.setdefault(kind, {})[name] = specs[name].check(value, kind)
         return RunConfig(self.scenario if scenario is None else scenario, dict(self.shared),
-                         nodes, self.source)
+                         nodes, self.source).checked()
+
+    def checked(self) -> RunConfig:
+        """Return the config after the checks that involve several nodes (ValueError if not).
+
+        The world's lockstep deadline and the robots' liveness signal come from the same
+        numbers: a robot that works on a step reports that it is alive once per
+        ``tick_period``, and the world declares a robot dead after ``step_timeout`` without
+        any word from it, so the deadline must span several periods.
+        """
+        tick = float(self.param("robot", "tick_period"))
+        timeout = float(self.param("world", "step_timeout"))
+        if timeout < LIVENESS_PERIODS * tick:
+            raise ValueError(f"{self.source}: world.step_timeout ({timeout:g} s) must be at "
+                             f"least {LIVENESS_PERIODS} x robot.tick_period ({tick:g} s): a "
+                             "robot working on a step reports that it is alive once per "
+                             "tick_period")
+        return self
 
     def params_document(self) -> dict[str, Any]:
         """The resolved ROS 2 parameter file as a mapping (write it with :func:`yaml.dump`)."""
@@ -208,7 +228,7 @@ def run_config_from_dict(doc: Any, where: str = "config") -> RunConfig:
     scenario = scenario_from_dict(raw, f"{where}: scenario")
     nodes = {kind: _check_block(doc[key], f"{where}: {key}", NODES[kind])
              for key, kind in NODE_KEYS.items() if key in doc}
-    return RunConfig(scenario, shared, nodes, where)
+    return RunConfig(scenario, shared, nodes, where).checked()
 
 
 def read_yaml(path: str | Path, what: str = "file") -> Any:

@@ -13,7 +13,8 @@ declared dead during step k is not waited for), it
 4. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` and
    ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
-After the scenario's last step it writes ``summary_path`` (DESIGN.md "Outputs of a run").
+After the scenario's last step it writes ``summary_path`` (DESIGN.md "Outputs of a run"); a
+run in which no step was processed writes none, so it cannot pass for a result.
 """
 
 from __future__ import annotations
@@ -100,9 +101,9 @@ class MonitorNode(Node):
         self.metrics_pub = self.create_publisher(TeamMetrics, T.MONITOR_METRICS,
                                                  publisher_qos("STEP"))
         self.estimates_pub = self.create_publisher(TargetSet, T.MONITOR_ESTIMATES,
-                                                   publisher_qos("LATCHED"))
+                                                   publisher_qos("STEP"))
         self.density_pub = self.create_publisher(DensityGrid, T.MONITOR_DENSITY,
-                                                 publisher_qos("OBSERVATION"))
+                                                 publisher_qos("STEP"))
         self.markers_pub = self.create_publisher(MarkerArray, T.MONITOR_MARKERS,
                                                  publisher_qos("OBSERVATION"))
         self.create_subscription(TargetSet, T.WORLD_TRUTH, self._on_truth,
@@ -289,7 +290,10 @@ class MonitorNode(Node):
     def _finish(self) -> None:
         self.done = True
         path = self.params["summary_path"]
-        if path:
+        if path and not self.series:
+            # A run that never stepped (the team did not start) has no result to report.
+            self.get_logger().error("monitor: no step was processed; no summary written")
+        elif path:
             Path(path).parent.mkdir(parents=True, exist_ok=True)
             Path(path).write_text(json.dumps(self.summary(), indent=2) + "\n")
             self.get_logger().info(f"monitor: summary written to {path}")

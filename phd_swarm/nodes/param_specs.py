@@ -65,10 +65,12 @@ WORLD = (
     ParamSpec("mode", "lockstep", "lockstep: step k+1 starts when every live robot reported "
               "step k (or timed out); realtime: steps at a fixed rate regardless.",
               choices=("lockstep", "realtime")),
-    ParamSpec("step_timeout", 15.0, "Lockstep: wall seconds to wait for a robot's report "
-              "before it counts as dead [s].", low=0.1, high=3600.0),
-    ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for every robot (and observer) to "
-              "be ready before step 0 [s].", low=0.1, high=3600.0),
+    ParamSpec("step_timeout", 15.0, "Lockstep: wall seconds without any word from a robot "
+              "(report or keep-alive status) before it counts as dead; at least 3 robot "
+              "tick_period s [s].", low=0.1, high=3600.0),
+    ParamSpec("ready_timeout", 60.0, "Start-up: wall seconds without a new robot (or "
+              "observer) becoming ready after which the world gives up and exits with an "
+              "error, without running a step [s].", low=0.1, high=3600.0),
     ParamSpec("observers", 0, "Number of observer nodes (monitor, recorder) that must have "
               "matched /world/truth before step 0.", low=0, high=64),
     ParamSpec("realtime_factor", 1.0, "Realtime: sim seconds per wall second.",
@@ -91,7 +93,8 @@ ROBOT = (
               "or laplace: the rule of succession (docs/decisions.md).",
               choices=("rate", "literal", "laplace")),
     ParamSpec("tick_period", 1.0, "Wall seconds without a new protocol message after which "
-              "one timeout round passes, and a waiting robot sends a keep-alive [s].",
+              "one timeout round passes, and a waiting robot sends a keep-alive; also the "
+              "period of its WORKING status to the world while a step lasts [s].",
               low=0.01, high=600.0),
     ParamSpec("timeout_ticks", 5, "Rounds without an answer before an awaited peer not "
               "heard from in that time (keep-alives included) is declared dead.", low=1,
@@ -125,6 +128,8 @@ RECORDER = (
               "gives the topics to subscribe at start, its text is stored as MCAP metadata."),
     ParamSpec("discover", True, "Also poll the ROS graph and record new phd_swarm topics "
               "(/clock, /world/*, /monitor/*, /robot_*/*) as they appear."),
+    ParamSpec("record_inboxes", False, "Also record the protocol traffic (/robot_*/inbox/*): "
+              "~90 % of a run's messages, not needed to re-evaluate or replay the results."),
 )
 
 #: Node key in a config file -> its parameters.

@@ -8,14 +8,22 @@ deep queue so that a burst is never overwritten before the executor takes it.
   creates its publisher to a new contact's inbox when it first needs it and writes at once;
   the transient-local history delivers that message when the two match. Every message
   matters for equality with the centralised filter.
-- ``STEP`` (one message per step that someone waits for or records: measurement sets,
-  statuses, truth, density grids, metrics): reliable, transient-local, short writer history,
-  so a reader that matches a little late (the recorder, the monitor) still gets the step.
-- ``LATCHED`` (state a late joiner must see: team state, poses, cells, goals, estimates):
-  reliable + transient-local, depth 1.
-- ``OBSERVATION`` (markers, the team density): reliable, shallow, volatile; a slow viewer
-  holds nobody back.
-- ``CLOCK``: reliable, volatile, depth 10; compatible with rclpy's best-effort time source.
+- ``STEP`` (every message written once per step: measurement sets, poses, statuses, cells,
+  goals, estimates, density grids, truth, team state, metrics, the team PHD): reliable,
+  transient-local, **keep-all** on both sides. A keep-all writer never overwrites a sample
+  that a matched reader has not acknowledged (it blocks instead, up to Fast DDS's resource
+  limit of 5,000 samples), and a keep-all reader never drops one it has not handed to the
+  executor, so a slow recorder or monitor gets every step instead of losing the oldest
+  ones (issue 15: a KEEP_LAST 8 writer lost 1-2 % of the step messages of a 20-robot run
+  under load). Transient-local lets a reader that matches a little late still get the
+  steps written before. Acknowledged samples stay in the writer's history for late
+  joiners; one run writes at most a few thousand per topic.
+- ``LATCHED`` (state a late joiner must see and nothing more): reliable + transient-local,
+  depth 1. No phd_swarm topic uses it today; kept for tools.
+- ``OBSERVATION`` (markers): reliable, shallow, volatile; a slow viewer holds nobody back.
+- ``CLOCK``: reliable, volatile, keep-all on the writer (so that a reliable recorder gets
+  every tick); rclpy's time source subscribes best effort, depth 1, which matches and never
+  holds the writer back.
 - ``PROTOCOL``: reliable, volatile, deep; for tests and tools that exchange protocol
   messages without the late-joiner guarantee.
 - ``SENSOR``: the standard sensor-data profile (best effort), only where loss is acceptable.
@@ -37,19 +45,26 @@ def _profile(depth: int, durability: DurabilityPolicy) -> QoSProfile:
                       reliability=ReliabilityPolicy.RELIABLE, durability=durability)
 
 
+def _keep_all(durability: DurabilityPolicy) -> QoSProfile:
+    # depth is ignored with KEEP_ALL; Fast DDS bounds the history by its resource limits.
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=0,
+                      reliability=ReliabilityPolicy.RELIABLE, durability=durability)
+
+
 PROTOCOL = _profile(1000, DurabilityPolicy.VOLATILE)
 
 INBOX_PUB = _profile(16, DurabilityPolicy.TRANSIENT_LOCAL)
 INBOX_SUB = _profile(1000, DurabilityPolicy.TRANSIENT_LOCAL)
 
-STEP_PUB = _profile(8, DurabilityPolicy.TRANSIENT_LOCAL)
-STEP_SUB = _profile(200, DurabilityPolicy.TRANSIENT_LOCAL)
+STEP_PUB = _keep_all(DurabilityPolicy.TRANSIENT_LOCAL)
+STEP_SUB = _keep_all(DurabilityPolicy.TRANSIENT_LOCAL)
 
 LATCHED = _profile(1, DurabilityPolicy.TRANSIENT_LOCAL)
 
 OBSERVATION = _profile(10, DurabilityPolicy.VOLATILE)
 
-CLOCK = _profile(10, DurabilityPolicy.VOLATILE)
+CLOCK = _keep_all(DurabilityPolicy.VOLATILE)
+CLOCK_SUB = _profile(10, DurabilityPolicy.VOLATILE)
 
 SENSOR = qos_profile_sensor_data
 
@@ -59,7 +74,7 @@ BY_NAME = {
     "STEP": (STEP_PUB, STEP_SUB),
     "LATCHED": (LATCHED, LATCHED),
     "OBSERVATION": (OBSERVATION, OBSERVATION),
-    "CLOCK": (CLOCK, CLOCK),
+    "CLOCK": (CLOCK, CLOCK_SUB),
 }
 
 

@@ -7,14 +7,23 @@ clock read and an append to the current chunk (DESIGN.md "MCAP logs").
 Topics
     With ``params_file`` set, the recorder loads that run config and subscribes at once to
     every topic of :func:`phd_swarm.nodes.topics.run_topics` for the scenario's team, with
-    the table's reader QoS deepened to :data:`MIN_TABLE_DEPTH`; the world and the robots
-    count it among their ``observers`` before step 0. With ``discover`` on, it also polls
-    the graph every 0.5 s (wall time) and subscribes to new topics under ``/clock``,
-    ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table QoS if the topic is in
-    the table (robot topics match by their relative name) and its publishers' offers are
-    compatible with it, else adapted to the offers as rosbag2 does (reliable if every
-    publisher is, transient-local if every publisher is; depth 100; reliable and volatile
-    while no publisher is known).
+    the table's reader QoS (keep-all for the step topics, so the reader never drops a
+    message it has not handed over; others deepened to :data:`MIN_TABLE_DEPTH`); the world
+    and the robots count it among their ``observers`` before step 0. The protocol inboxes
+    (``/robot_<n>/inbox/*``, ~90 % of a run's messages) only with ``record_inboxes``. With
+    ``discover`` on, it also polls the graph every 0.5 s (wall time) and subscribes to new
+    topics under ``/clock``, ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table
+    QoS if the topic is in the table (robot topics match by their relative name) and its
+    publishers' offers are compatible with it, else adapted to the offers as rosbag2 does
+    (reliable if every publisher is, transient-local if every publisher is; depth 100;
+    reliable and volatile while no publisher is known).
+Completeness
+    With ``params_file`` set, the recorder notes the step of every step-topic message (from
+    its stamp, no decoding; for statuses only ``STEP_DONE``) and the alive flags of every
+    team state. At close it checks them (:mod:`phd_swarm.nodes.completeness`: expected,
+    recorded and missing steps per topic), logs the verdict (an error naming the topics and
+    steps when anything is missing) and stores the report as metadata
+    ``phd_swarm.completeness``, where ``run_swarm`` and ``evaluate`` read it.
 Times
     ``log_time`` is the wall-clock time [ns since the Unix epoch] at which the callback
     ran. ``publish_time`` is the message's own stamp when its first field is a
@@ -26,34 +35,43 @@ Times
 Metadata
     ``phd_swarm.config`` (``params_yaml``: the params file text, ``source``: its path) and
     ``phd_swarm.run`` (``scenario``, ``seed``, ``robots``) when ``params_file`` is set;
-    ``phd_swarm.recorder`` (``output``, ``compression``, ``chunk_size``, ``discover``).
+    ``phd_swarm.recorder`` (``output``, ``compression``, ``chunk_size``, ``discover``,
+    ``record_inboxes``); ``phd_swarm.completeness`` at close.
 Shutdown
     :meth:`Recorder.close` (called by :func:`main` on Ctrl-C / SIGTERM) finishes the file
-    with its summary and footer and logs how many messages it wrote. A recorder killed with
-    SIGKILL leaves every finished chunk readable (:mod:`phd_swarm.tools.mcap_log`).
+    with its summary and footer, writes rosbag2's ``metadata.yaml`` beside it (so that
+    ``ros2 bag info`` and rosbag2 readers open the run directory) and logs how many messages
+    it wrote. A recorder killed with SIGKILL leaves every finished chunk readable
+    (:mod:`phd_swarm.tools.mcap_log`).
 """
 
 from __future__ import annotations
 
 import importlib
+import json
 import re
 import struct
 import sys
 import time
+from collections import defaultdict
 from collections.abc import Callable
 from functools import cache
 from typing import Any
 
+import numpy as np
 from rclpy.clock import Clock, ClockType
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 
 from phd_swarm.config import load_run_config
+from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.param_specs import RECORDER, SHARED
 from phd_swarm.nodes.params import ParameterError, declare
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.tools.bag_metadata import write_bag_metadata
 from phd_swarm.tools.mcap_log import (
     SEPARATOR,
     DefinitionNotFoundError,
@@ -62,6 +80,7 @@ from phd_swarm.tools.mcap_log import (
     message_definition,
     qos_yaml,
 )
+from phd_swarm_msgs.msg import RobotStatus, TeamState
 
 #: Topics the graph poll records: /clock and everything under /world, /monitor, /robot_<n>.
 RECORDED = re.compile(r"^(?:/clock$|/world/|/monitor/|/robot_\d+/)")
@@ -78,6 +97,9 @@ DEFAULT_DEPTH = 100
 MIN_TABLE_DEPTH = 1000
 
 _ROBOT_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/(.+)$")
+_INBOX_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/inbox/")
+_U32_LE = struct.Struct("<I")
+_U32_BE = struct.Struct(">I")
 _STAMP_TYPES = ("std_msgs/Header", "builtin_interfaces/Time")
 _STAMP_LE = struct.Struct("<iI")
 _STAMP_BE = struct.Struct(">iI")
@@ -138,9 +160,25 @@ def adapted_qos(offers: list[Any]) -> QoSProfile:
         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
 
+def status_state(data: bytes) -> int:
+    """``state`` of a CDR-serialised ``RobotStatus`` (after the header's stamp and frame id).
+
+    The field is a ``uint8`` (no alignment) right after the frame id string (a ``uint32``
+    length that counts the terminating NUL, then the bytes).
+    """
+    u32 = _U32_LE if data[1] & 1 else _U32_BE
+    (n,) = u32.unpack_from(data, 12)
+    return data[16 + n]
+
+
 def reader_qos(qos_name: str) -> QoSProfile:
-    """The recorder's reader profile for table QoS ``qos_name``: the table's, deepened."""
+    """The recorder's reader profile for table QoS ``qos_name``: the table's, deepened.
+
+    Keep-all profiles stay keep-all (depth does not apply to them).
+    """
     table = subscription_qos(qos_name)
+    if table.history == HistoryPolicy.KEEP_ALL:
+        return table
     return QoSProfile(history=table.history, depth=max(table.depth, MIN_TABLE_DEPTH),
                       reliability=table.reliability, durability=table.durability)
 
@@ -195,11 +233,21 @@ class Recorder(Node):
                                  f"{exc}") from None
         self._subs: dict[str, Any] = {}
         self._skipped: set[str] = set()
+        self._inboxes = self.params["record_inboxes"]
+        #: Completeness bookkeeping (with a run config): step topic -> steps seen, and
+        #: team-state step -> alive flags.
+        self._dt_ns = 0.0
+        self._robots = 0
+        self._step_topics: frozenset[str] = frozenset()
+        self._steps: dict[str, set[int]] = defaultdict(set)
+        self._team: dict[int, np.ndarray] = {}
+        self.report: completeness.Completeness | None = None
         self.log.add_metadata("phd_swarm.recorder", {
             "output": str(self.params["output"]),
             "compression": self.params["compression"],
             "chunk_size": str(self.params["chunk_size"]),
             "discover": str(self.params["discover"]).lower(),
+            "record_inboxes": str(self._inboxes).lower(),
         })
         if run_config is not None:
             self._record_config(run_config)
@@ -230,9 +278,15 @@ class Recorder(Node):
         s = rc.scenario
         self.log.add_metadata("phd_swarm.run", {"scenario": s.name, "seed": str(s.seed),
                                                 "robots": str(s.robots)})
+        self._dt_ns = s.dt * 1e9
+        self._robots = s.robots
+        self._step_topics = frozenset(completeness.step_topics(
+            s.robots, robot_density=bool(rc.param("robot", "publish_density")),
+            monitor_density=bool(rc.param("monitor", "publish_density"))))
         for spec in T.run_topics(range(s.robots)):
-            self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
-                           qos_yaml(publisher_qos(spec.qos)))
+            if self._inboxes or not _INBOX_TOPIC.match(spec.name):
+                self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
+                               qos_yaml(publisher_qos(spec.qos)))
 
     def subscribe(self, topic: str, ros_type: str, qos: QoSProfile,
                   offered_qos_yaml: str = "") -> bool:
@@ -253,6 +307,8 @@ class Recorder(Node):
             self.get_logger().warning(f"not recording {topic} ({ros_type}): {exc}")
             return False
         callback = self._callback(topic, starts_with_stamp(ros_type))
+        if topic in self._step_topics:
+            callback = self._step_callback(topic, callback)
         self._subs[topic] = self.create_subscription(msg_class, topic, callback, qos, raw=True)
         return True
 
@@ -274,10 +330,54 @@ class Recorder(Node):
             write(topic, data, t, sec * 1_000_000_000 + nsec if sec >= 0 else t)
         return on_stamped
 
+    def _step_callback(self, topic: str, record: Callable[[bytes], None]
+                       ) -> Callable[[bytes], None]:
+        """``record`` that also notes the message's step (see *Completeness* above)."""
+        steps = self._steps[topic]
+        dt_ns = self._dt_ns
+
+        def step(data: bytes) -> int:
+            sec, nsec = (_STAMP_LE if data[1] & 1 else _STAMP_BE).unpack_from(data, 4)
+            return int(round((sec * 1_000_000_000 + nsec) / dt_ns))
+
+        if topic == T.WORLD_ROBOTS:
+            def on_team(data: bytes) -> None:
+                record(data)
+                msg = deserialize_message(data, TeamState)
+                steps.add(int(msg.step))
+                flags = np.zeros(self._robots, dtype=bool)
+                ids = np.asarray(msg.robot_ids, dtype=np.int64)
+                ok = ids < self._robots
+                flags[ids[ok]] = np.asarray(msg.alive, dtype=bool)[ok]
+                self._team[int(msg.step)] = flags
+            return on_team
+        if topic.endswith("/status"):
+            def on_status(data: bytes) -> None:
+                record(data)
+                if status_state(data) == RobotStatus.STATE_STEP_DONE:
+                    steps.add(step(data))
+            return on_status
+
+        def on_step(data: bytes) -> None:
+            record(data)
+            steps.add(step(data))
+        return on_step
+
+    def check_completeness(self) -> completeness.Completeness | None:
+        """Expected, recorded and missing steps of every step topic recorded so far.
+
+        None without a run config (the step period and team size are unknown).
+        """
+        if not self._step_topics:
+            return None
+        return completeness.check(self._steps, self._team, self._robots,
+                                  [t for t in self._subs if t in self._step_topics])
+
     def discover(self) -> None:
         """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""
         for topic, types in self.get_topic_names_and_types():
-            if topic in self._subs or topic in self._skipped or not RECORDED.match(topic):
+            if topic in self._subs or topic in self._skipped or not RECORDED.match(topic) \
+                    or (not self._inboxes and _INBOX_TOPIC.match(topic)):
                 continue
             if len(types) != 1:
                 self.get_logger().warning(f"{topic} has several types {types}; recording "
@@ -309,6 +409,12 @@ class Recorder(Node):
         try:
             for sub in self._subs.values():
                 drained += self._drain(sub)
+            self.report = self.check_completeness()
+            if self.report is not None:
+                self.log.add_metadata("phd_swarm.completeness", {
+                    "complete": str(self.report.complete).lower(),
+                    "missing": str(self.report.missing),
+                    "report": json.dumps(self.report.to_dict())})
         finally:
             for sub in self._subs.values():
                 self.destroy_subscription(sub)
@@ -316,8 +422,15 @@ class Recorder(Node):
         # After Ctrl-C the context is already shut down and the node's logger could not
         # publish to /rosout; a logger of another name only prints.
         logger = self.get_logger() if self.context.ok() else get_logger("recorder.close")
+        try:
+            write_bag_metadata(self.log.path)
+        except (LogError, OSError) as exc:
+            logger.warning(f"no metadata.yaml beside {self.log.path}: {exc}")
         logger.info(f"wrote {self.log.message_count} messages ({drained} taken at close) on "
                     f"{len(self._subs)} topics to {self.log.path}")
+        if self.report is not None:
+            (logger.info if self.report.complete else logger.error)(
+                f"step messages {self.report.describe()}")
 
     @staticmethod
     def _drain(sub: Any) -> int:

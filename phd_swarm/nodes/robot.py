@@ -18,7 +18,9 @@ A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds
 new protocol message arrived during a period while the step waits, one round passes
 (:meth:`RobotFilter.tick`), and the robot re-sends its state to its contacts as a
 keep-alive; after ``timeout_ticks`` rounds the awaited peers not heard from in that time
-are declared dead (keep-alives count as heard, not as new).
+are declared dead (keep-alives count as heard, not as new). On every period of a step the
+robot also publishes a ``WORKING`` status: the world's liveness signal, so a robot that
+waits on a dead peer is not itself taken for dead.
 
 At start-up the robot waits for the world's team state (``/world/robots``, latched) to
 initialise its partition, and for ``observers`` subscribers on its status and density, then
@@ -140,11 +142,11 @@ class RobotNode(Node):
             raise ParameterError(f"duplicate robot id {rid}: another node already publishes "
                                  f"{self.resolve_topic_name('status')}")
         self.status_pub = self.create_publisher(RobotStatus, "status", publisher_qos("STEP"))
-        self.goal_pub = self.create_publisher(PoseStamped, "goal", publisher_qos("LATCHED"))
-        self.cell_pub = self.create_publisher(CellPolygon, "cell", publisher_qos("LATCHED"))
+        self.goal_pub = self.create_publisher(PoseStamped, "goal", publisher_qos("STEP"))
+        self.cell_pub = self.create_publisher(CellPolygon, "cell", publisher_qos("STEP"))
         self.density_pub = self.create_publisher(DensityGrid, "density", publisher_qos("STEP"))
         self.estimates_pub = self.create_publisher(TargetSet, "estimates",
-                                                   publisher_qos("LATCHED"))
+                                                   publisher_qos("STEP"))
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
                                  subscription_qos("STEP"))
         for kind, typ in _ROS_TYPE.items():
@@ -285,6 +287,10 @@ class RobotNode(Node):
         if self.filter.done:
             self._heard = False
             return
+        # Liveness apart from progress: the world waits for a robot it hears from.
+        self.status_pub.publish(RobotStatus(
+            header=convert.header(self.filter.step, self.dt, self.frame_id),
+            state=RobotStatus.STATE_WORKING, robot_id=self.robot_id, step=self.filter.step))
         if self._heard:
             self._heard = False
             return

@@ -3,7 +3,8 @@
 :func:`spin_nodes` is every node module's ``main``: it starts rclpy with the command-line
 arguments, builds the nodes, spins them until Ctrl-C / SIGTERM or until every node that has a
 ``finished`` attribute says it is finished, and always destroys the nodes and shuts rclpy
-down. A bad parameter ends the process with exit code 2 and one clear line on stderr.
+down. A bad parameter ends the process with exit code 2 and one clear line on stderr; a node
+with an ``exit_code`` attribute sets the exit code of any other end (the largest wins).
 
 The executor is rclpy's ``EventsExecutor`` (several times faster per callback than the
 ``SingleThreadedExecutor``, DESIGN.md) unless ``PHD_SWARM_EXECUTOR=single``.
@@ -65,6 +66,7 @@ def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = No
         print(f"error: {exc}", file=sys.stderr)
         code = 2
     finally:
+        code = max([code, *(int(getattr(n, "exit_code", 0)) for n in nodes)])
         for node in nodes:
             close = getattr(node, "close", None)
             if close is not None:

@@ -71,12 +71,12 @@ def robot_topic(robot_id: int, relative: str) -> str:
 #: Topics in every robot's namespace, by relative name: (type, QoS, writer, rate).
 ROBOT_TOPICS = {
     "measurements": ("phd_swarm_msgs/msg/MeasurementSet", "STEP", "world", "once per step"),
-    "pose": ("geometry_msgs/msg/PoseStamped", "LATCHED", "world", "once per step"),
-    "goal": ("geometry_msgs/msg/PoseStamped", "LATCHED", "robot", "once per step"),
+    "pose": ("geometry_msgs/msg/PoseStamped", "STEP", "world", "once per step"),
+    "goal": ("geometry_msgs/msg/PoseStamped", "STEP", "robot", "once per step"),
     "status": ("phd_swarm_msgs/msg/RobotStatus", "STEP", "robot", "once per step"),
-    "cell": ("phd_swarm_msgs/msg/CellPolygon", "LATCHED", "robot", "once per step"),
+    "cell": ("phd_swarm_msgs/msg/CellPolygon", "STEP", "robot", "once per step"),
     "density": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot", "once per step"),
-    "estimates": ("phd_swarm_msgs/msg/TargetSet", "LATCHED", "robot", "once per step"),
+    "estimates": ("phd_swarm_msgs/msg/TargetSet", "STEP", "robot", "once per step"),
     **{f"inbox/{kind}": (typ, "INBOX", "peers", "per protocol step, from contacts")
        for kind, typ in INBOX.items()},
 }
@@ -90,9 +90,9 @@ TEAM_TOPICS = {
     WORLD_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "world",
                     "once per step"),
     MONITOR_METRICS: ("phd_swarm_msgs/msg/TeamMetrics", "STEP", "monitor", "once per step"),
-    MONITOR_ESTIMATES: ("phd_swarm_msgs/msg/TargetSet", "LATCHED", "monitor",
+    MONITOR_ESTIMATES: ("phd_swarm_msgs/msg/TargetSet", "STEP", "monitor",
                         "once per step"),
-    MONITOR_DENSITY: ("phd_swarm_msgs/msg/DensityGrid", "OBSERVATION", "monitor",
+    MONITOR_DENSITY: ("phd_swarm_msgs/msg/DensityGrid", "STEP", "monitor",
                       "once per step (parameter publish_density)"),
     MONITOR_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "monitor",
                       "once per step"),

@@ -7,16 +7,25 @@ Per step k it publishes ``/clock`` (t = k dt), the team state (``/world/robots``
 (``/robot_<r>/pose``, ``/robot_<r>/measurements``) and markers, then collects each robot's
 ``STEP_DONE`` status (goal g_r) from ``/robot_<r>/status``:
 
-- lockstep (default): step k+1 starts when every live robot has reported step k; a robot
-  that has not reported within ``step_timeout`` wall seconds counts as dead (the world
-  stops scanning and moving it, and says so in the team state);
+- lockstep (default): step k+1 starts when every live robot has reported step k. Liveness
+  is apart from progress: a robot working on a step sends a ``WORKING`` status once per
+  ``tick_period`` (its protocol's own period), and only a robot from which *nothing* was
+  heard for ``step_timeout`` wall seconds counts as dead (the world stops scanning and
+  moving it, and says so in the team state). A robot blocked on a dead peer keeps saying
+  it is alive until its protocol times that peer out, so it is never taken for dead; the
+  config check keeps ``step_timeout`` >= 3 ``tick_period`` s;
 - realtime: steps follow a wall-clock timer at ``dt / realtime_factor``; a robot that has
   not reported keeps its last goal.
 
-Before step 0 the world publishes the initial team state and waits (``ready_timeout``) for
-every robot's ``READY`` status and for ``observers`` subscribers on the truth. After the last
-step it publishes the final team state, keeps spinning ``linger`` seconds so that observers
-receive everything, and sets :attr:`finished`.
+Before step 0 the world publishes the initial team state and waits for every robot's
+``READY`` status and for ``observers`` subscribers on the truth, logging how many are ready
+every few seconds. It waits as long as the team is still coming up: ``ready_timeout``
+counts from the last robot (or observer) that became ready. If it runs out, the world does
+not step with part of the team: it logs an error naming the missing robots and the likely
+cause (no process seen in the graph, or running but not ready), sets :attr:`exit_code` to
+:data:`EXIT_NOT_READY` and :attr:`finished`. After the last step it publishes the final
+team state, keeps spinning ``linger`` seconds so that observers receive everything, and
+sets :attr:`finished`.
 """
 
 from __future__ import annotations
@@ -34,12 +43,19 @@ from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.markers import world_markers
 from phd_swarm.nodes.param_specs import SHARED, WORLD
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.sim.world import World
 from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TargetSet, TeamState
+
+#: Exit code of a world whose team never became ready (nothing was run).
+EXIT_NOT_READY = 3
+
+#: Wall seconds between start-up progress lines.
+READY_LOG_PERIOD = 5.0
 
 
 class WorldNode(Node):
@@ -55,6 +71,8 @@ class WorldNode(Node):
         Robots the world counts as dead (no report in time).
     rejected : int
         Statuses rejected (bad numbers, wrong id, unexpected step).
+    exit_code : int
+        0, or :data:`EXIT_NOT_READY` when the team did not become ready.
     """
 
     def __init__(self, **kwargs) -> None:
@@ -71,8 +89,13 @@ class WorldNode(Node):
         self.ready: set[int] = set()
         self.goals: dict[int, np.ndarray] = {}
         self.reported: set[int] = set()
+        self.exit_code = 0
+        #: Wall time (monotonic) at which each robot was last heard from (any status).
+        self.heard: dict[int, float] = {}
         self._phase = "waiting"
         self._phase_since = time.monotonic()
+        self._ready_progress = (0, self._phase_since)
+        self._ready_logged = self._phase_since
         self._started_wall = 0.0
         self._current = -1
 
@@ -85,7 +108,7 @@ class WorldNode(Node):
                                                    T.robot_topic(r, "measurements"),
                                                    publisher_qos("STEP")) for r in self.ids}
         self.pose_pubs = {r: self.create_publisher(PoseStamped, T.robot_topic(r, "pose"),
-                                                   publisher_qos("LATCHED")) for r in self.ids}
+                                                   publisher_qos("STEP")) for r in self.ids}
         for r in self.ids:
             self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
                                      self._make_status_callback(r), subscription_qos("STEP"))
@@ -144,11 +167,15 @@ class WorldNode(Node):
         if msg.robot_id != topic_id:
             self._reject(f"status of robot {msg.robot_id} on robot {topic_id}'s topic")
             return
+        if msg.state not in (RobotStatus.STATE_READY, RobotStatus.STATE_STEP_DONE,
+                             RobotStatus.STATE_WORKING):
+            self._reject(f"robot {topic_id}: unknown status state {msg.state}")
+            return
+        self.heard[topic_id] = time.monotonic()
         if msg.state == RobotStatus.STATE_READY:
             self.ready.add(topic_id)
             return
         if msg.state != RobotStatus.STATE_STEP_DONE:
-            self._reject(f"robot {topic_id}: unknown status state {msg.state}")
             return
         goal = np.array([msg.goal.x, msg.goal.y])
         if not np.all(np.isfinite(goal)):
@@ -205,30 +232,72 @@ class WorldNode(Node):
     def _on_watchdog(self) -> None:
         waited = time.monotonic() - self._phase_since
         if self._phase == "waiting":
-            observers = self.truth_pub.get_subscription_count()
-            everyone = set(self.ids) <= self.ready and observers >= self.params["observers"]
-            if not everyone and waited < self.params["ready_timeout"]:
-                return
-            self._check_duplicates()
-            if not everyone:
-                self._kill(set(self.ids) - self.ready,
-                           f"was not ready within {self.params['ready_timeout']} s")
-                if observers < self.params["observers"]:
-                    self.get_logger().error(f"world: only {observers} of "
-                                            f"{self.params['observers']} observers matched")
-            self._started_wall = time.monotonic()
-            self._publish_step()
+            self._wait_for_team()
         elif self._phase == "stepping" and self.params["mode"] == "lockstep":
-            if waited >= self.params["step_timeout"]:
-                self._kill(self._live() - self.reported,
-                           f"did not report step {self._current} within "
-                           f"{self.params['step_timeout']} s")
-                self._maybe_finish_step()
+            timeout = self.params["step_timeout"]
+            if waited >= timeout:
+                now = time.monotonic()
+                silent = {r for r in self._live() - self.reported
+                          if now - max(self.heard.get(r, 0.0), self._phase_since) >= timeout}
+                if silent:
+                    self._kill(silent, f"did not report step {self._current} and was not "
+                                       f"heard from for {timeout} s")
+                    self._maybe_finish_step()
         elif self._phase == "lingering" and waited >= self.params["linger"]:
             for pub in (self.team_pub, self.truth_pub, self.clock_pub):
                 pub.wait_for_all_acked(Duration(seconds=5.0))
             self._phase = "finished"
             self.finished = True
+
+    def _wait_for_team(self) -> None:
+        """Start step 0 once the team is ready; give up honestly if it stops coming up."""
+        now = time.monotonic()
+        observers = self.truth_pub.get_subscription_count()
+        need = self.params["observers"]
+        count = len(self.ready) + min(observers, need)
+        if count > self._ready_progress[0]:
+            self._ready_progress = (count, now)
+        if set(self.ids) <= self.ready and observers >= need:
+            self._check_duplicates()
+            self.get_logger().info(f"world: all {len(self.ids)} robots and {need} observers "
+                                   f"ready after {now - self._phase_since:.1f} s")
+            self._started_wall = now
+            self._publish_step()
+            return
+        missing = sorted(set(self.ids) - self.ready)
+        if now - self._ready_logged >= READY_LOG_PERIOD:
+            self._ready_logged = now
+            self.get_logger().info(f"world: waiting for the team: {len(self.ready)} of "
+                                   f"{len(self.ids)} robots ready, {min(observers, need)} of "
+                                   f"{need} observers")
+        timeout = self.params["ready_timeout"]
+        if now - self._ready_progress[1] < timeout:
+            return
+        self._check_duplicates()
+        seen = [r for r in missing if self.count_publishers(T.robot_topic(r, "status")) > 0]
+        unseen = [r for r in missing if r not in seen]
+        causes = []
+        if unseen:
+            causes.append(f"robots {ranges(unseen)} are not in the ROS graph: their processes "
+                          "did not start, exited (see their logs), or were not discovered "
+                          "(with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST only 32 DDS "
+                          "participants per host find each other; use a discovery server, "
+                          "run_swarm.sh --discovery-server on, or --robots-per-process)")
+        if seen:
+            causes.append(f"robots {ranges(seen)} run but did not report READY: they wait "
+                          "for the team state, their contacts' inboxes or the observers to "
+                          "match (see their logs)")
+        if observers < need:
+            causes.append(f"only {observers} of {need} observers (monitor, recorder) "
+                          "subscribed to the truth")
+        self.get_logger().error(
+            f"world: start-up failed: {len(self.ready)} of {len(self.ids)} robots ready and "
+            f"nothing new for {timeout:g} s; "
+            + (f"missing robots {ranges(missing)}; " if missing else "")
+            + "; ".join(causes) + ". No step was run.")
+        self.exit_code = EXIT_NOT_READY
+        self._phase = "failed"
+        self.finished = True
 
     def _on_realtime_tick(self) -> None:
         if self._phase == "stepping":

@@ -10,11 +10,16 @@
    caller's ROS_DOMAIN_ID, in its own process group, logging to ``logs/<node>.log``;
 3. shows the monitor's progress lines (sim time, steps per second, OSPA, estimated vs true
    number of targets) while the world runs;
-4. when the world is done (or on Ctrl-C), lets the monitor write ``summary.json``, stops the
-   recorder so that ``run.mcap`` is closed cleanly, stops the robots, and reports.
+4. when the world is done, lets the monitor write ``summary.json``, stops the recorder so
+   that ``run.mcap`` is closed cleanly (it checks that every step message is in the log),
+   stops the robots, adds the recorder's completeness report to ``summary.json``, and
+   reports. Ctrl-C stops every child at once and is done within :data:`STOP_GRACE` s plus
+   the clean-up of Fast DDS's shared memory, whatever the team size.
 
 A robot process that dies mid-run does not stop the run: the world counts it dead after
-``step_timeout`` and the summary lists it in ``dead_robots``.
+``step_timeout`` and the summary lists it in ``dead_robots``. A team that does not come up
+does not make a run: the world gives up (naming the missing robots and the likely cause),
+no summary is written and the exit code is 3.
 """
 
 from __future__ import annotations
@@ -33,13 +38,19 @@ from pathlib import Path
 from typing import IO, Any
 
 from phd_swarm.config import RunConfig, load_run_config
+from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.param_specs import ROBOT
 from phd_swarm.nodes.topics import robot_namespace
+from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.testing import clean_fastdds_shm, stop_process_group
+from phd_swarm.tools.mcap_log import LogError, read_metadata
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
 #: simple discovery among ~40 processes on 2 cores lost matches).
 AUTO_SERVER_PROCESSES = 16
+
+#: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
+STOP_GRACE = 6.0
 
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
 WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
@@ -68,6 +79,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
                         f"{AUTO_SERVER_PROCESSES} processes)")
     p.add_argument("--no-record", action="store_true", help="do not write run.mcap")
+    p.add_argument("--record-inboxes", action="store_true",
+                   help="also record the protocol traffic (/robot_*/inbox/*) in run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     return p.parse_args(argv)
 
@@ -121,7 +134,7 @@ def _pump(stream: IO[str], log: IO[str], echo: bool) -> None:
         log.write(line)
         log.flush()
         if echo and ("steps/s" in line or line.startswith(("[ERROR]", "error:"))
-                     or "world: done" in line):
+                     or "world: done" in line or "waiting for the team" in line):
             print(line.rstrip().split("]: ", 1)[-1], flush=True)
 
 
@@ -166,21 +179,45 @@ class Swarm:
         self.cpu[name] = max(self.cpu.get(name, 0.0), self.cpu_seconds(name))
         return stop_process_group(proc, grace)
 
-    def stop_all(self) -> None:
-        """Stop every child still running (robots in parallel), then clean Fast DDS shm."""
-        running = [n for n, p in self.procs.items() if p.poll() is None]
+    def stop_many(self, names: list[str], grace: float) -> None:
+        """SIGINT the groups of ``names`` at once; SIGKILL what still runs after ``grace`` s."""
+        running = [n for n in names if n in self.procs and self.procs[n].poll() is None]
         for n in running:
             self.cpu[n] = max(self.cpu.get(n, 0.0), self.cpu_seconds(n))
+            _signal_group(self.procs[n], signal.SIGINT)
+        deadline = time.monotonic() + grace
         for n in running:
             try:
-                os.killpg(self.procs[n].pid, signal.SIGINT)
-            except ProcessLookupError:
+                self.procs[n].wait(timeout=max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
                 pass
         for n in running:
-            self.stop(n, grace=5.0)
+            # The whole group, even if its leader exited: no grandchild survives.
+            _signal_group(self.procs[n], signal.SIGKILL)
+        for n in running:
+            try:
+                self.procs[n].wait(timeout=2.0)
+            except subprocess.TimeoutExpired:
+                pass
+
+    def stop_all(self, grace: float = 5.0) -> None:
+        """Stop every child still running, all at once, then clean Fast DDS shm."""
+        self.stop_many(list(self.procs), grace)
         for t in self._threads:
-            t.join(timeout=2.0)
+            t.join(timeout=1.0)
         clean_fastdds_shm()
+
+    def exited(self, prefix: str) -> dict[str, int]:
+        """Children named ``prefix...`` that have exited, with their exit codes."""
+        return {n: p.returncode for n, p in self.procs.items()
+                if n.startswith(prefix) and p.poll() is not None}
+
+
+def _signal_group(proc: subprocess.Popen, sig: int) -> None:
+    try:
+        os.killpg(proc.pid, sig)
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 def run(opts: argparse.Namespace) -> int:
@@ -197,7 +234,8 @@ def run(opts: argparse.Namespace) -> int:
         robot={"observers": observers},
         monitor={"summary_path": str(run_dir / "summary.json"), "exit_when_done": True},
         recorder={"output": str(run_dir / "run.mcap"),
-                  "params_file": str(run_dir / "config.yaml"), "discover": False})
+                  "params_file": str(run_dir / "config.yaml"), "discover": False,
+                  "record_inboxes": bool(opts.record_inboxes)})
     params = rc.write_params(run_dir / "config.yaml")
     env = dict(os.environ)
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
@@ -245,15 +283,19 @@ def run(opts: argparse.Namespace) -> int:
             if monitor.poll() is not None and monitor.returncode != 0:
                 raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
                                    f"{run_dir}/logs/monitor.log")
-        if world.returncode != 0:
+        if world.returncode == EXIT_NOT_READY:
+            _explain_start_failure(swarm, run_dir)
+            code = EXIT_NOT_READY
+        elif world.returncode != 0:
             print(f"run_swarm: the world exited with code {world.returncode}; see "
                   f"{run_dir}/logs/world.log", file=sys.stderr)
             code = 1
-        end_timeout = float(rc.param("monitor", "end_timeout")) + 15.0
-        try:
-            swarm.procs["monitor"].wait(timeout=end_timeout)
-        except subprocess.TimeoutExpired:
-            print("run_swarm: the monitor did not finish; stopping it", file=sys.stderr)
+        if code != EXIT_NOT_READY:
+            end_timeout = float(rc.param("monitor", "end_timeout")) + 15.0
+            try:
+                swarm.procs["monitor"].wait(timeout=end_timeout)
+            except subprocess.TimeoutExpired:
+                print("run_swarm: the monitor did not finish; stopping it", file=sys.stderr)
     except KeyboardInterrupt:
         interrupted = True
         print("\nrun_swarm: interrupted; stopping the swarm", flush=True)
@@ -262,13 +304,13 @@ def run(opts: argparse.Namespace) -> int:
         code = 1
     finally:
         signal.signal(signal.SIGTERM, previous)
-        if "world" in swarm.procs:
-            swarm.stop("world")
-        if "monitor" in swarm.procs:
-            swarm.stop("monitor")
-        if record and "recorder" in swarm.procs:
-            swarm.stop("recorder", grace=30.0)
-        swarm.stop_all()
+        if interrupted or code == EXIT_NOT_READY:
+            swarm.stop_all(STOP_GRACE)
+        else:
+            swarm.stop_many(["world", "monitor"], grace=10.0)
+            if record:
+                swarm.stop_many(["recorder"], grace=30.0)
+            swarm.stop_all()
         if server is not None:
             server.terminate()
             try:
@@ -276,7 +318,29 @@ def run(opts: argparse.Namespace) -> int:
             except subprocess.TimeoutExpired:
                 server.kill()
     wall = time.monotonic() - started
+    if code == EXIT_NOT_READY:
+        print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",
+              file=sys.stderr)
+        return code
     return _report(run_dir, rc, wall, interrupted, swarm.cpu) or code
+
+
+def _explain_start_failure(swarm: Swarm, run_dir: Path) -> None:
+    """Say why the team did not come up: the world's verdict, and robot processes that died."""
+    print(f"run_swarm: start-up failed: the team did not become ready (see "
+          f"{run_dir}/logs/world.log)", file=sys.stderr)
+    for name, rc in sorted(swarm.exited("robot").items()):
+        print(f"run_swarm: {name} exited with code {rc} before the run; see "
+              f"{run_dir}/logs/{name}.log", file=sys.stderr)
+
+
+def log_completeness(mcap: Path) -> Completeness | None:
+    """The recorder's completeness report stored in ``mcap`` (None if there is none)."""
+    try:
+        meta = read_metadata(mcap).get("phd_swarm.completeness")
+    except (LogError, OSError):
+        return None
+    return None if meta is None else Completeness.from_dict(json.loads(meta["report"]))
 
 
 def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,
@@ -312,6 +376,9 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
     s = rc.scenario
     stepping = summary.pop("wall_duration_s")
     robots_cpu = sum(v for k, v in cpu.items() if k.startswith("robot"))
+    report = log_completeness(run_dir / "run.mcap") if (run_dir / "run.mcap").exists() \
+        else None
+    summary["log_completeness"] = None if report is None else report.to_dict()
     summary.update({"controller": rc.param("robot", "controller"),
                     "mode": rc.param("world", "mode"), "complete": summary["steps"] == s.steps,
                     "run_dir": str(run_dir), "wall_duration_s": wall,
@@ -327,6 +394,12 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
           f"{summary['ospa_final']} m, targets est {summary['cardinality_est_final']} / true "
           f"{summary['cardinality_true_final']}; dead robots: "
           f"{summary['dead_robots'] or 'none'}", flush=True)
+    if report is not None:
+        print(f"run_swarm: log {report.describe()}", flush=True,
+              file=sys.stdout if report.complete else sys.stderr)
+    elif (run_dir / "run.mcap").exists():
+        print("run_swarm: the log has no completeness report (the recorder did not close "
+              "it); check it with scripts/evaluate.sh", file=sys.stderr)
     files = "run.mcap, summary.json" if (run_dir / "run.mcap").exists() else "summary.json"
     print(f"run_swarm: results in {run_dir}/ ({files}, config.yaml, logs/)", flush=True)
     return 130 if interrupted else 0

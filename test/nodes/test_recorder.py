@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import signal
 import subprocess
@@ -36,10 +37,11 @@ from phd_swarm.nodes.recorder import (
     accepts,
     adapted_qos,
     starts_with_stamp,
+    status_state,
     table_spec,
 )
 from phd_swarm.tools.mcap_log import open_log, read_messages, read_metadata, summarize
-from phd_swarm_msgs.msg import RobotStatus, TargetSet
+from phd_swarm_msgs.msg import RobotStatus, TargetSet, TeamState
 
 ROOT = Path(__file__).resolve().parents[2]
 SEC = 1_000_000_000
@@ -84,6 +86,16 @@ def test_stamp_detection_and_table_lookup():
     assert table_spec("/robot_1/unknown") is None and table_spec("/robot_x/status") is None
 
 
+def test_status_state_is_read_from_the_cdr_bytes():
+    from rclpy.serialization import serialize_message
+
+    for frame in ("", "map", "a_longer_frame_id"):
+        for state in (RobotStatus.STATE_READY, RobotStatus.STATE_STEP_DONE, 7):
+            msg = RobotStatus(header=Header(stamp=Time(sec=3), frame_id=frame), state=state,
+                              robot_id=4, step=3)
+            assert status_state(serialize_message(msg)) == state
+
+
 def test_qos_follows_the_publishers_offers():
     reliable = QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -107,7 +119,9 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     out = tmp_path / "run.mcap"
     rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
                     compression="lz4")
-    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS)
+    # The protocol inboxes only when asked (record_inboxes).
+    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - len(T.INBOX)
+    assert not any("/inbox/" in t for t in rec.topics)
     talker = ros.node("talker")
     truth = talker.create_publisher(TargetSet, T.WORLD_TRUTH, publisher_qos("STEP"))
     status = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"),
@@ -294,3 +308,67 @@ def test_record_sh_checks_the_config_and_records(ros, children, tmp_path):
     meta = read_metadata(out)
     assert meta["phd_swarm.config"]["source"] == str(cfg)
     assert meta["phd_swarm.recorder"]["compression"] == "none"
+
+
+@pytest.mark.ros
+def test_inboxes_are_recorded_only_when_asked(ros, tmp_path):
+    cfg = _config(tmp_path, robots=2)
+    rec = _recorder(ros, output=str(tmp_path / "run.mcap"), params_file=str(cfg),
+                    discover=False, record_inboxes=True)
+    assert {T.robot_topic(r, f"inbox/{k}") for r in range(2) for k in T.INBOX} <= set(
+        rec.topics)
+    rec.close()
+    assert read_metadata(tmp_path / "run.mcap")["phd_swarm.recorder"]["record_inboxes"] \
+        == "true"
+
+
+@pytest.mark.ros
+def test_completeness_names_the_missing_steps_and_is_stored_in_the_log(ros, tmp_path):
+    """A report names exactly the steps that are missing, and expects nothing more.
+
+    Two robots, 4 steps; robot 1 dies during step 1 and robot 0's status of step 2 is never
+    published.
+    """
+    cfg = _config(tmp_path, robots=2)
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False)
+    talker = ros.node("talker")
+    pubs = {name: talker.create_publisher(typ, name, publisher_qos("STEP")) for name, typ in [
+        (T.WORLD_ROBOTS, TeamState), (T.robot_topic(0, "status"), RobotStatus),
+        (T.robot_topic(1, "status"), RobotStatus)]}
+    _matched(ros, list(pubs.values()))
+    dt = load_run_config(cfg).scenario.dt
+    steps = 4
+
+    def stamp(k):
+        ns = int(round(k * dt * SEC))
+        return Header(stamp=Time(sec=ns // SEC, nanosec=ns % SEC), frame_id="map")
+
+    for k in range(steps + 1):
+        alive = [True, k <= 1]
+        pubs[T.WORLD_ROBOTS].publish(TeamState(header=stamp(k), step=k, robot_ids=[0, 1],
+                                               positions=[Point(), Point()], alive=alive))
+        for r in (0, 1):
+            if k == 0:
+                pubs[T.robot_topic(r, "status")].publish(RobotStatus(
+                    header=stamp(0), state=RobotStatus.STATE_READY, robot_id=r))
+            if k < steps and alive[r] and (r, k) != (0, 2) and (r, k) != (1, 1):
+                pubs[T.robot_topic(r, "status")].publish(RobotStatus(
+                    header=stamp(k), state=RobotStatus.STATE_STEP_DONE, robot_id=r, step=k))
+    assert ros.spin_until(lambda: rec.message_count == 5 + 2 + 3 + 1, timeout=10.0), \
+        rec.message_count
+    rec.close()
+    report = rec.report
+    assert report.steps == steps and not report.complete
+    assert report.topics[T.robot_topic(0, "status")].missing == (2,)
+    # Robot 1 reported step 0; it died during step 1 (dead in the team state of step 2), so
+    # its status of step 1 is not expected.
+    assert report.topics[T.robot_topic(1, "status")].expected == 1
+    assert report.topics[T.robot_topic(1, "status")].missing == ()
+    assert report.topics[T.WORLD_ROBOTS].missing == ()
+    assert report.topics[T.WORLD_TRUTH].missing == tuple(range(steps))
+    meta = read_metadata(out)["phd_swarm.completeness"]
+    assert meta["complete"] == "false" and int(meta["missing"]) == report.missing
+    from phd_swarm.nodes.completeness import Completeness
+
+    assert Completeness.from_dict(json.loads(meta["report"])) == report

@@ -7,12 +7,14 @@ import os
 import signal
 import subprocess
 import time
+from collections import Counter
 from pathlib import Path
 
 import pytest
 
 from phd_swarm.tools.mcap_log import read_messages, read_metadata, summarize
 from phd_swarm.tools.run_swarm import WALL_CLOCK_FIELDS
+from phd_swarm_msgs.msg import RobotStatus
 
 ROOT = Path(__file__).resolve().parents[2]
 RUN_SWARM = str(ROOT / "scripts" / "run_swarm.sh")
@@ -76,9 +78,29 @@ def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, c
     for i in range(ROBOTS):
         assert counts[f"/robot_{i}/measurements"] == STEPS
         assert counts[f"/robot_{i}/density"] == STEPS
-        assert counts[f"/robot_{i}/status"] == STEPS + 1      # READY, then one per step
-        assert counts[f"/robot_{i}/inbox/state"] > 0
+        # READY, one STEP_DONE per step, and a WORKING keep-alive per tick_period of a
+        # step that lasted longer
+        states = Counter(r.msg.state for r in read_messages(
+            run / "run.mcap", topics=[f"/robot_{i}/status"]))
+        assert states[RobotStatus.STATE_READY] == 1
+        assert states[RobotStatus.STATE_STEP_DONE] == STEPS
+        assert set(states) <= {RobotStatus.STATE_READY, RobotStatus.STATE_STEP_DONE,
+                               RobotStatus.STATE_WORKING}
+    assert not any("/inbox/" in t for t in counts)  # protocol traffic only when asked
+    report = summary["log_completeness"]
+    assert report["complete"] and report["missing"] == 0, report
+    assert report["steps"] == STEPS and report["recorded"] == report["expected"]
+    assert report["topics"]["/robot_0/status"] == {"expected": STEPS, "recorded": STEPS,
+                                                   "missing_steps": []}
     assert info.topics["/world/truth"].ros_type == "phd_swarm_msgs/msg/TargetSet"
+    # An independent reader opens the run directory (rosbag2's metadata.yaml) and agrees.
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([run]) as reader:
+        assert {c.topic: c.msgcount for c in reader.connections} == {
+            t: n for t, n in counts.items()}
+        assert {c.topic: c.msgtype for c in reader.connections}["/world/truth"] == \
+            "phd_swarm_msgs/msg/TargetSet"
     meta = read_metadata(run / "run.mcap")
     assert "scenario" in meta["phd_swarm.config"]["params_yaml"]
     metrics = [r.msg for r in read_messages(run / "run.mcap", topics=["/monitor/metrics"])]
@@ -130,3 +152,75 @@ def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, chi
     metrics = [r.msg for r in read_messages(run / "run.mcap", topics=["/monitor/metrics"])]
     assert metrics[-1].robots_reported == ROBOTS - 1
     assert metrics[-1].step == steps - 1
+
+
+def _pids(run_dir: Path, module: str) -> list[int]:
+    """PIDs of this run's processes running ``python -m module``."""
+    out = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            args = [a.decode(errors="replace")
+                    for a in (entry / "cmdline").read_bytes().split(b"\0")]
+        except OSError:
+            continue
+        if module in args and any(str(run_dir) in a for a in args):
+            out.append(int(entry.name))
+    return out
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_a_team_that_never_comes_up_fails_the_run_without_a_summary(tmp_path, children):
+    config = tmp_path / "short_ready.yaml"
+    config.write_text(Path(CONFIG).read_text().replace(
+        "    step_timeout: 15.0", "    step_timeout: 15.0\n    ready_timeout: 4.0"))
+    proc = children.start([RUN_SWARM, str(config), "--robots", "3", "--duration", "5",
+                           "--out", str(tmp_path), "--name", "dead_on_arrival"])
+    run = tmp_path / "dead_on_arrival"
+    deadline = time.monotonic() + 60.0
+    killed: set[int] = set()
+    while len(killed) < 3:     # every robot process dies before it can report READY
+        assert proc.poll() is None and time.monotonic() < deadline, "robots did not start"
+        for pid in set(_pids(run, "phd_swarm.nodes.robot")) - killed:
+            os.kill(pid, signal.SIGKILL)
+            killed.add(pid)
+        time.sleep(0.05)
+    out, err = proc.communicate(timeout=120.0)
+    assert proc.returncode == 3, f"{out}\n{err}"
+    assert not (run / "summary.json").exists()
+    assert "start-up failed" in err and "nothing was run" in err
+    assert "missing robots 0-2" in out + err       # the world's verdict, echoed
+    for i in range(3):
+        assert f"robot_{i} exited with code" in err
+    world = (run / "logs" / "world.log").read_text()
+    assert "not in the ROS graph" in world and "No step was run" in world
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_ctrl_c_stops_every_process_of_the_run(tmp_path, children):
+    proc = _start(children, tmp_path, "interrupted", "--duration", "600")
+    run = tmp_path / "interrupted"
+    log = run / "logs" / "monitor.log"
+    deadline = time.monotonic() + 120.0
+    while not (log.exists() and "step 21/" in log.read_text()):
+        assert proc.poll() is None and time.monotonic() < deadline, "the run did not start"
+        time.sleep(0.2)
+    started = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60.0)
+    stopped = time.monotonic() - started
+    assert proc.returncode == 130, f"{out}\n{err}"
+    assert "interrupted" in out
+    # Every child gets SIGINT at once and SIGKILL after STOP_GRACE s (the figure for 100
+    # robots is in docs/benchmarks.md, not asserted here).
+    for module in ("phd_swarm.nodes.robot", "phd_swarm.nodes.world",
+                   "phd_swarm.nodes.monitor", "phd_swarm.nodes.recorder"):
+        assert _pids(run, module) == [], module
+    summary = json.loads((run / "summary.json").read_text())
+    assert 0 < summary["steps"] < 1200 and not summary["complete"]
+    info = summarize(run / "run.mcap")
+    assert not info.truncated, "the recorder closed the log on Ctrl-C"
+    print(f"run_swarm stopped {stopped:.1f} s after Ctrl-C")

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import time
 from pathlib import Path
 
 import pytest
 
-from phd_swarm.tools.mcap_log import summarize
+from phd_swarm.tools.mcap_log import read_messages, read_metadata, summarize
+from phd_swarm_msgs.msg import RobotStatus
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPTS = ROOT / "scripts"
@@ -50,7 +52,12 @@ def test_world_robots_and_recorder_started_by_hand_complete_a_run(tmp_path, chil
     info = summarize(out)
     assert not info.truncated
     assert info.topics["/world/truth"].message_count == 8
-    assert info.topics["/robot_1/status"].message_count == 9
+    done = [r.msg.step for r in read_messages(out, topics=["/robot_1/status"])
+            if r.msg.state == RobotStatus.STATE_STEP_DONE]
+    assert done == list(range(8))
+    report = json.loads(read_metadata(out)["phd_swarm.completeness"]["report"])
+    assert report["complete"] and report["steps"] == 8, report
+    assert (out.parent / "metadata.yaml").exists()
 
 
 def test_run_robot_rejects_a_bad_id_and_a_bad_config(tmp_path):

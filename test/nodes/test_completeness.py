@@ -1,0 +1,79 @@
+"""Completeness of a log: expected, recorded and missing steps per step topic."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.completeness import Completeness, check, ranges, step_of, step_topics
+
+
+def _full(robots: int, steps: int, alive: dict[int, np.ndarray]) -> dict[str, set[int]]:
+    """What a lossless log holds when robots are alive as in ``alive`` (step -> flags)."""
+    rec: dict[str, set[int]] = {}
+    for name in step_topics(robots):
+        rec[name] = set(range(steps + 1))
+    for r in range(robots):
+        for kind in ("measurements", "pose"):
+            rec[T.robot_topic(r, kind)] = {k for k in range(steps) if alive[k][r]}
+        for kind in ("status", "density", "cell", "goal", "estimates"):
+            rec[T.robot_topic(r, kind)] = {k for k in range(steps)
+                                           if alive[k][r] and alive[k + 1][r]}
+    return rec
+
+
+def test_a_lossless_log_is_complete_with_a_death_and_a_rejoin():
+    robots, steps = 3, 10
+    alive = {k: np.array([True, not 4 <= k < 7, True]) for k in range(steps + 1)}
+    report = check(_full(robots, steps, alive), alive, robots, step_topics(robots))
+    assert report.complete and report.steps == steps and report.absent == ()
+    # Robot 1 died during step 3 and was back at step 7: scanned at 0-3 and 7-9, reported
+    # steps 0-2 and 7-9.
+    assert report.topics[T.robot_topic(1, "measurements")].expected == 7
+    assert report.topics[T.robot_topic(1, "status")].expected == 6
+    assert report.topics[T.CLOCK].expected == steps + 1
+    assert report.topics[T.WORLD_TRUTH].expected == steps
+    assert "complete: " in report.describe()
+
+
+def test_missing_steps_are_named_and_round_trip():
+    robots, steps = 2, 8
+    alive = {k: np.ones(robots, dtype=bool) for k in range(steps + 1)}
+    rec = _full(robots, steps, alive)
+    rec[T.robot_topic(1, "density")] -= {2, 3, 4, 6}
+    rec[T.MONITOR_METRICS].discard(0)
+    report = check(rec, alive, robots, step_topics(robots))
+    assert not report.complete and report.missing == 5
+    assert report.gaps() == {T.MONITOR_METRICS: (0,), T.robot_topic(1, "density"): (2, 3, 4, 6)}
+    text = report.describe()
+    assert "INCOMPLETE: 5 of" in text and "/robot_1/density steps 2-4, 6" in text
+    assert Completeness.from_dict(report.to_dict()) == report
+
+
+def test_a_missing_team_state_is_missing_and_its_step_takes_the_previous_flags():
+    robots, steps = 2, 5
+    alive = {k: np.ones(robots, dtype=bool) for k in range(steps + 1)}
+    rec = _full(robots, steps, alive)
+    rec[T.WORLD_ROBOTS].discard(3)
+    team = {k: v for k, v in alive.items() if k != 3}
+    report = check(rec, team, robots, step_topics(robots))
+    assert report.gaps() == {T.WORLD_ROBOTS: (3,)}
+
+
+def test_a_run_without_a_monitor_lists_its_topics_as_absent():
+    robots, steps = 1, 4
+    alive = {k: np.ones(robots, dtype=bool) for k in range(steps + 1)}
+    rec = {t: s for t, s in _full(robots, steps, alive).items()
+           if not t.startswith("/monitor/")}
+    report = check(rec, alive, robots, step_topics(robots))
+    assert report.complete
+    assert set(report.absent) == {T.MONITOR_METRICS, T.MONITOR_ESTIMATES, T.MONITOR_DENSITY}
+    assert "no monitor ran" in report.describe()
+
+
+def test_step_topics_follow_the_density_switches_and_steps_come_from_stamps():
+    assert T.MONITOR_DENSITY not in step_topics(1, monitor_density=False)
+    assert T.robot_topic(0, "density") not in step_topics(1, robot_density=False)
+    assert not any("/inbox/" in t or "markers" in t for t in step_topics(3))
+    assert step_of(int(7 * 0.5e9), 0.5) == 7 and step_of(int(3 * 0.1e9) - 1, 0.1) == 3
+    assert ranges([5, 1, 2, 3, 9, 10]) == "1-3, 5, 9-10" and ranges([]) == ""
