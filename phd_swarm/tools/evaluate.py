@@ -11,7 +11,8 @@ monitor saw completely: same windows, same arithmetic).
 Writes into ``--out`` (default: ``evaluation/`` next to the log):
 
 - ``evaluation.json``: the summary (the ``summary.json`` fields of the figures, plus the
-  agreement with the monitor and whether the log was truncated);
+  agreement with the monitor, whether the log was truncated, and its completeness: per
+  step topic the expected, recorded and missing steps, :mod:`phd_swarm.tools.log_check`);
 - ``series.csv``: one row per step (t, OSPA and its parts, cardinalities, windows, and the
   monitor's OSPA);
 - ``ospa.png``: OSPA and cardinality over time;
@@ -34,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.scoring import score_step, series_summary
+from phd_swarm.tools.log_check import WARNING, check_log
 from phd_swarm.tools.mcap_log import LogError
 from phd_swarm.tools.plots import Frame, save_animation, save_series, save_snapshot
 from phd_swarm.tools.run_log import RunLog, load_run
@@ -151,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         anim = ([k for k in sorted(run.steps) if k % args.every == 0 or k == last]
                 if args.animate and not args.no_plots else [])
         rows, kept = evaluate(run, set(snaps) | set(anim))
+        report = check_log(args.log, run.config)
     except (LogError, ValueError) as exc:
         print(f"{prog}: {exc}", file=sys.stderr)
         return 1
@@ -164,7 +167,10 @@ def main(argv: list[str] | None = None) -> int:
                "controller": run.controller, "steps": len(rows),
                "sim_duration_s": len(rows) * s.dt, **series_summary(rows),
                "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
-               "monitor_agreement": agreement(rows)}
+               "monitor_agreement": agreement(rows),
+               "log_completeness": report.to_dict()}
+    if not report.complete:
+        print(f"{prog}: {WARNING}: {report.describe()}", file=sys.stderr)
     write_csv(rows, out / "series.csv")
     written = [out / "evaluation.json", out / "series.csv"]
     if not args.no_plots:

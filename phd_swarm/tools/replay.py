@@ -18,6 +18,10 @@
    log time of the first selected message; ``--fast`` sends them back to back. ``/clock`` is
    republished like any topic, so nodes with ``use_sim_time`` follow the replay.
 
+Before anything is sent, the log's completeness is checked (the recorder's report stored in
+the log, or :func:`phd_swarm.tools.log_check.check_log` for a log cut short): a log with
+gaps is replayed, but with a warning on stderr that names the topics and steps missing.
+
 Log time is the recorder's receive time (wall clock), so the replay reproduces the run's
 wall-clock pacing, including its start-up. Progress lines go to stderr every
 :data:`PROGRESS_PERIOD` seconds, then one final line. SIGINT / SIGTERM stop the replay
@@ -29,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import logging
 import signal
 import struct
@@ -690,6 +695,31 @@ def _replay_live(argv: Sequence[str], opts: argparse.Namespace, log: LogReader,
             signal.signal(sig, handler)
 
 
+def log_gaps(log: LogReader, index: LogIndex) -> str | None:
+    """The log's completeness verdict, or None when it cannot be judged (no run config).
+
+    The recorder's report stored in a finished log; recomputed from the messages for a log
+    cut short (the recorder could not store one).
+    """
+    from phd_swarm.nodes.completeness import Completeness
+    from phd_swarm.tools.log_check import check_log
+
+    stored = log.metadata().get("phd_swarm.completeness")
+    if stored is not None and not index.truncated:
+        return Completeness.from_dict(json.loads(stored["report"])).describe()
+    if "phd_swarm.config" not in log.metadata():
+        return None
+    return check_log(log.path).describe()
+
+
+def _warn_gaps(log: LogReader, index: LogIndex) -> None:
+    from phd_swarm.tools.log_check import WARNING
+
+    verdict = log_gaps(log, index)
+    if verdict is not None and not verdict.startswith("complete"):
+        print(f"{PROG}: {WARNING}: {verdict}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``scripts/replay.sh`` (``python -m phd_swarm.tools.replay``)."""
     from rclpy.utilities import remove_ros_args
@@ -708,6 +738,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 except UsageError as exc:
                     print(f"{PROG}: error: {exc}", file=sys.stderr)
                     return 2
+                _warn_gaps(log, index)
                 if opts.dry_run:
                     for line in dry_run(log, index, selection, None if opts.fast
                                         else opts.rate):

@@ -201,7 +201,8 @@ class RunLog:
         return out
 
 
-def _config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfig:
+def config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfig:
+    """The run config stored in a log's ``phd_swarm.config`` metadata (LogError if none)."""
     record = metadata.get("phd_swarm.config")
     if not record or "params_yaml" not in record:
         raise LogError(f"{path}: the log holds no run configuration (phd_swarm.config "
@@ -245,7 +246,7 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
     with open_log(path) as log:
         metadata = log.metadata()
         run_config = (load_run_config(config) if config is not None
-                      else _config_from_log(path, metadata))
+                      else config_from_log(path, metadata))
         n_robots = run_config.scenario.robots
         steps: dict[int, StepRecord] = {}
 

@@ -5,15 +5,23 @@ from __future__ import annotations
 import csv
 import json
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from rclpy.serialization import deserialize_message
 
-from phd_swarm.tools.mcap_log import LogWriter, open_log
-from phd_swarm.tools.run_log import load_run
+from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.scan import Scan
+from phd_swarm.nodes import convert
+from phd_swarm.nodes.completeness import step_of
+from phd_swarm.tools.mcap_log import LogWriter, open_log, read_messages
+from phd_swarm.tools.run_log import config_from_log, load_run
+from phd_swarm_msgs.msg import DensityGrid, MeasurementSet
 
 ROOT = Path(__file__).resolve().parents[2]
+RECORDED_STEPS = 24
 EVALUATE = str(ROOT / "scripts" / "evaluate.sh")
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -35,6 +43,28 @@ def _copy_log(src: Path, dst: Path, chunk_size: int = 1 << 20, metadata: bool = 
                 out.add_channel(rec.topic, rec.ros_type)
                 out.write(rec.topic, rec.data, rec.log_time_ns, rec.publish_time_ns)
     return dst
+
+
+def _copy_without(src: Path, dst: Path, drop) -> Path:
+    """Rewrite ``src`` into ``dst`` without the messages ``drop(topic, step)`` selects."""
+    with open_log(src) as log:
+        meta = log.metadata()
+        dt = log_config(src).scenario.dt
+        with LogWriter(dst) as out:
+            for name, data in meta.items():
+                if name != "phd_swarm.completeness":   # as if the recorder had been killed
+                    out.add_metadata(name, data)
+            for rec in log.messages(decode=False):
+                out.add_channel(rec.topic, rec.ros_type)
+                if not drop(rec.topic, step_of(rec.publish_time_ns, dt)):
+                    out.write(rec.topic, rec.data, rec.log_time_ns, rec.publish_time_ns)
+    return dst
+
+
+def log_config(path: Path):
+    """The run config stored in the log at ``path``."""
+    with open_log(path) as log:
+        return config_from_log(path, log.metadata())
 
 
 def _is_png(path: Path) -> bool:
@@ -60,6 +90,8 @@ def test_evaluation_reproduces_the_monitor_and_draws_the_run(recorded_run, tmp_p
     assert ev["monitor_agreement"] == {"steps_compared": 24, "max_abs_ospa_difference": 0.0,
                                        "steps_only_in_evaluation": 0}
     assert ev["truncated"] is False and ev["controller"] == "phd"
+    assert ev["log_completeness"]["complete"] and ev["log_completeness"]["missing"] == 0
+    assert "WARNING" not in res.stderr
 
     with open(out / "series.csv") as f:
         rows = list(csv.DictReader(f))
@@ -70,6 +102,64 @@ def test_evaluation_reproduces_the_monitor_and_draws_the_run(recorded_run, tmp_p
     for name in ("ospa.png", "snapshot_3s.png", "snapshot_11.5s.png"):
         assert _is_png(out / name), name
     assert (tmp_path / "run.gif").read_bytes()[:6] == b"GIF89a"
+
+
+def test_a_log_with_gaps_is_flagged_naming_topics_and_steps(recorded_run, tmp_path):
+    gappy = _copy_without(recorded_run / "run.mcap", tmp_path / "gappy.mcap",
+                          lambda topic, k: (topic == "/robot_1/density" and k in (5, 6))
+                          or (topic == "/robot_2/measurements" and k == 9))
+    res = _evaluate(str(gappy), "--out", str(tmp_path / "eval"), "--no-plots")
+    assert res.returncode == 0, res.stderr
+    assert "WARNING: the log has gaps" in res.stderr
+    assert "/robot_1/density steps 5-6" in res.stderr
+    assert "/robot_2/measurements steps 9" in res.stderr
+    ev = json.loads((tmp_path / "eval" / "evaluation.json").read_text())
+    report = ev["log_completeness"]
+    assert not report["complete"] and report["missing"] == 3
+    assert report["topics"]["/robot_1/density"]["missing_steps"] == [5, 6]
+
+    replay = subprocess.run([str(ROOT / "scripts" / "replay.sh"), str(gappy), "--dry-run"],
+                            capture_output=True, text=True, timeout=120)
+    assert replay.returncode == 0, replay.stderr
+    assert "WARNING: the log has gaps" in replay.stderr
+    assert "/robot_1/density steps 5-6" in replay.stderr
+    check = subprocess.run([sys.executable, "-m", "phd_swarm.tools.log_check", str(gappy)],
+                           capture_output=True, text=True, timeout=120)
+    assert check.returncode == 1 and "INCOMPLETE: 3 of" in check.stdout
+    clean = subprocess.run([str(ROOT / "scripts" / "replay.sh"),
+                            str(recorded_run / "run.mcap"), "--dry-run"],
+                           capture_output=True, text=True, timeout=120)
+    assert clean.returncode == 0 and "WARNING" not in clean.stderr
+
+
+def test_the_logged_measurement_sets_reproduce_the_logged_team_phd(recorded_run):
+    """The log is a complete record of the run's filter.
+
+    A centralised grid PHD fed the logged measurement sets (robot-id order, Dames Alg. 2)
+    gives the logged team PHD at every step.
+    """
+    path = recorded_run / "run.mcap"
+    s = log_config(path).scenario
+    assert s.targets.kind == "static"
+    scans: dict[int, list[Scan]] = {}
+    team: dict[int, np.ndarray] = {}
+    topics = ["/monitor/density"] + [f"/robot_{r}/measurements" for r in range(s.robots)]
+    for rec in read_messages(path, topics=topics, decode=False):
+        if rec.topic == "/monitor/density":
+            m = deserialize_message(rec.data, DensityGrid)
+            image = np.zeros(s.grid.shape)
+            convert.add_density(image, m, s.grid)
+            team[int(m.step)] = image
+        else:
+            scan = convert.scan_from_ros(deserialize_message(rec.data, MeasurementSet), 10_000)
+            scans.setdefault(scan.step, []).append(scan)
+    assert sorted(team) == sorted(scans) == list(range(RECORDED_STEPS))
+    central = CentralPhdFilter(s.grid, s.models)
+    for k in range(RECORDED_STEPS):
+        assert len(scans[k]) == s.robots
+        central.step(scans[k])
+        mass = central.total_mass
+        assert np.max(np.abs(central.weights - team[k])) <= 1e-9 * mass, k
 
 
 def test_a_truncated_log_is_evaluated_up_to_its_last_complete_step(recorded_run, tmp_path):
