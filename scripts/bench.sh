@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Benchmarks: `scripts/bench.sh core|comms|swarm|engines [--quick]`. Sets up if needed; prints the figures and
+# Benchmarks: `scripts/bench.sh core|comms|swarm|engines|recorder [--quick]`. Sets up if needed; prints the figures and
 # writes them as JSON under bench/results/.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines [--quick] [options]" >&2; exit 2; }
+usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines|recorder [--quick] [options]" >&2; exit 2; }
 [ $# -ge 1 ] || usage
 what="$1"; shift
 "$ROOT/scripts/setup.sh" >/dev/null
@@ -16,5 +16,6 @@ case "$what" in
   comms) exec python "$ROOT/bench/comms.py" "$@" ;;
   swarm) exec python "$ROOT/bench/swarm.py" "$@" ;;
   engines) exec python "$ROOT/bench/engines.py" "$@" ;;
+  recorder) exec python "$ROOT/bench/recorder.py" "$@" ;;
   *) usage ;;
 esac

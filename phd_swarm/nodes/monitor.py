@@ -91,7 +91,8 @@ class MonitorNode(Node):
         self.cells: dict[int, np.ndarray] = {}
         self.positions: dict[int, np.ndarray] = {}
         self.goals: dict[int, np.ndarray] = {}
-        self.dead_reported: set[int] = set()
+        #: Each robot's dead set in its latest status (robots rejoin: only the latest counts).
+        self.dead_reported: dict[int, frozenset[int]] = {}
         self.next_step = 0
         self._wall_start: float | None = None
         self._last_progress = time.monotonic()
@@ -153,7 +154,7 @@ class MonitorNode(Node):
             self.statuses[msg.step][msg.robot_id] = msg
             if math.isfinite(msg.goal.x) and math.isfinite(msg.goal.y):
                 self.goals[msg.robot_id] = np.array([msg.goal.x, msg.goal.y])
-            self.dead_reported.update(int(i) for i in msg.dead_ids)
+            self.dead_reported[int(msg.robot_id)] = frozenset(int(i) for i in msg.dead_ids)
         self._touch()
 
     def _on_cell(self, msg: CellPolygon) -> None:
@@ -268,7 +269,15 @@ class MonitorNode(Node):
         """The run's summary (DESIGN.md "Outputs of a run") from the steps processed so far."""
         s = self.scenario
         final_alive = self.alive.get(max(self.alive)) if self.alive else frozenset()
-        dead = sorted((set(range(s.robots)) - set(final_alive or ())) | self.dead_reported)
+        final_alive = set(final_alive or ())
+        dead = set(range(s.robots)) - final_alive
+        for rid in final_alive:
+            dead |= self.dead_reported.get(rid, frozenset())
+        seen_dead: set[int] = set()
+        rejoined: set[int] = set()
+        for k in sorted(self.alive):
+            rejoined |= seen_dead & self.alive[k]
+            seen_dead |= set(range(s.robots)) - self.alive[k]
         msgs = [r["messages_per_robot"] for r in self.series if r["robots_reported"]]
         wall = (time.monotonic() - self._wall_start) if self._wall_start else 0.0
         return {
@@ -277,7 +286,8 @@ class MonitorNode(Node):
             "wall_duration_s": wall,
             **series_summary(self.series),
             "messages_per_robot_per_step": float(np.mean(msgs)) if msgs else 0.0,
-            "dead_robots": dead,
+            "dead_robots": sorted(dead),
+            "rejoined_robots": sorted(rejoined),
             "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
             "rejected_messages_monitor": self.rejected,
         }

@@ -107,6 +107,15 @@ ROBOT = (
               "monitor needs it)."),
     ParamSpec("max_measurements", 10000, "Measurement sets with more entries are rejected "
               "as absurd.", low=1, high=10_000_000),
+    ParamSpec("fault_drop", 0.0, "Fault injection: probability that a protocol message this "
+              "robot sends is lost (phd_swarm.core.protocol.faults, as in the in-memory "
+              "engine).", low=0.0, high=1.0),
+    ParamSpec("fault_delay", 0.0, "Fault injection: probability that a protocol message not "
+              "lost is held back 1..fault_delay_rounds tick periods.", low=0.0, high=1.0),
+    ParamSpec("fault_delay_rounds", 1, "Fault injection: most tick periods a delayed message "
+              "is held back.", low=1, high=1000),
+    ParamSpec("fault_seed", 0, "Fault injection: seed of the robots' fault generators "
+              "(default_rng([fault_seed, robot_id])).", low=0, high=2**31 - 1),
 )
 
 MONITOR = (

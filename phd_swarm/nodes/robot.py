@@ -22,10 +22,26 @@ are declared dead (keep-alives count as heard, not as new). On every period of a
 robot also publishes a ``WORKING`` status: the world's liveness signal, so a robot that
 waits on a dead peer is not itself taken for dead.
 
-At start-up the robot waits for the world's team state (``/world/robots``, latched) to
-initialise its partition, and for ``observers`` subscribers on its status and density, then
-reports ``READY``. It refuses to start when another node already publishes this robot id's
-status (a duplicate robot id).
+Membership comes from the world's team state (``/world/robots``: ids, positions, alive
+flags), which the robot reads every step: step k starts when both the measurement set and
+the team state of step k are in, and the protocol learns from it who died and who came back
+(:meth:`RobotFilter.observe_team`). A robot the world counted dead (it was silent for the
+world's ``step_timeout``, or its process was restarted) sees itself dead in a team state;
+when the world says it is alive again, it rejoins at that step (:meth:`RobotFilter.rejoin`:
+no bins of its own, the step's hand-over gives it its cell's bins). A restarted process
+(``scripts/run_robot.sh ID`` again) finds the run in progress from the team states it gets
+(the topic is keep-all, transient-local: the history arrives first), ignores the old
+steps, reports ``READY``, and the world lets it rejoin at the next step.
+
+Lossy links (fault injection, same option and meaning as the in-memory engine's
+``faults``): ``fault_drop`` and ``fault_delay`` route every outgoing protocol message through
+a seeded :class:`phd_swarm.core.protocol.faults.FaultyLink`; delayed messages are held back
+whole tick periods. The protocol re-sends what a waiting peer lacks when its keep-alive
+arrives, so a lost message costs time, not a robot.
+
+At start-up the robot waits for the world's team state to initialise its partition, and for
+``observers`` subscribers on its status and density, then reports ``READY``. It refuses to
+start when another node already publishes this robot id's status (a duplicate robot id).
 """
 
 from __future__ import annotations
@@ -42,6 +58,7 @@ from rclpy.node import Node
 from phd_swarm.core.controller import ControllerConfig, decide
 from phd_swarm.core.extraction import expected_cardinality, extract_targets
 from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.protocol.faults import FaultyLink, LinkFaults
 from phd_swarm.core.protocol.messages import (
     CellMsg,
     Envelope,
@@ -134,6 +151,17 @@ class RobotNode(Node):
         self._started = time.monotonic()
         self._peer_pubs: dict[tuple[int, str], object] = {}
         self._finished = -1
+        #: The world's team states by step: (ids, positions (R, 2), alive flags).
+        self.teams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        #: Counted dead by the world: steps up to ``join_after`` are not this robot's.
+        self.evicted = False
+        self.join_after = -1
+        faults = LinkFaults(drop=self.params["fault_drop"], delay=self.params["fault_delay"],
+                            max_delay_rounds=self.params["fault_delay_rounds"],
+                            seed=self.params["fault_seed"])
+        self.link = FaultyLink.for_sender(faults, rid)
+        #: Delayed envelopes: [tick periods left, envelope].
+        self._held: list[list] = []
 
         if self.get_namespace() != T.robot_namespace(rid):
             raise ParameterError(f"robot {rid} must run in namespace {T.robot_namespace(rid)}"
@@ -152,8 +180,8 @@ class RobotNode(Node):
         for kind, typ in _ROS_TYPE.items():
             self.create_subscription(typ, f"inbox/{kind}", self._make_inbox_callback(kind),
                                      subscription_qos("INBOX"))
-        self._team_sub = self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
-                                                  subscription_qos("LATCHED"))
+        self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
+                                 subscription_qos("STEP"))
         self.create_timer(self.params["tick_period"], self._on_timer,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f"robot {rid}: {self.controller.kind} controller, "
@@ -161,22 +189,35 @@ class RobotNode(Node):
 
     # ------------------------------------------------------------------ start-up
     def _on_team(self, msg: TeamState) -> None:
-        if self.initialised:
-            return
         ids = np.array(msg.robot_ids, dtype=np.int64)
         try:
             pos = convert.xy(msg.positions, "positions")
-            if len(pos) != len(ids) or len(np.unique(ids)) != len(ids):
-                raise convert.InvalidMessage("ids and positions differ in length or repeat")
-            self.filter.initialise(ids, pos)
+            alive = np.asarray(msg.alive, dtype=bool)
+            if len(pos) != len(ids) or len(alive) != len(ids) \
+                    or len(np.unique(ids)) != len(ids):
+                raise convert.InvalidMessage("ids, positions and alive flags differ in length "
+                                             "or ids repeat")
+            if self.robot_id not in ids:
+                raise convert.InvalidMessage(f"robot {self.robot_id} is not in the team")
+            if not self.initialised:
+                self.filter.initialise(ids, pos)
         except (ValueError, convert.InvalidMessage) as exc:
             self._reject("team_state", f"team state from {T.WORLD_ROBOTS}: {exc}")
             return
-        self.team_ids = frozenset(int(i) for i in ids)
-        self.initialised = True
-        self.destroy_subscription(self._team_sub)
-        self._prepare_peers()
-        self._check_ready()
+        k = int(msg.step)
+        self.teams[k] = (ids, pos, alive)
+        if not alive[int(np.flatnonzero(ids == self.robot_id)[0])] and k > self.join_after:
+            if not self.evicted:
+                self.get_logger().warning(f"robot {self.robot_id}: the world counts it dead "
+                                          f"at step {k}; it rejoins when the world says so")
+            self.evicted = True
+            self.join_after = k
+        if not self.initialised:
+            self.team_ids = frozenset(int(i) for i in ids)
+            self.initialised = True
+            self._prepare_peers()
+            self._check_ready()
+        self._start_pending()
 
     def _prepare_peers(self) -> None:
         """Create the publishers to the contacts' inboxes ahead of the step that uses them.
@@ -202,6 +243,14 @@ class RobotNode(Node):
         if not matched:
             self.get_logger().error(f"robot {self.robot_id}: observers did not match within "
                                     f"{self.params['ready_timeout']} s; going on without them")
+        latest = max(self.teams, default=0)
+        if latest > 0 and not self.evicted:
+            # The run is under way (the team states' history came in): this process was
+            # restarted, and the world lets it rejoin after this READY.
+            self.evicted = True
+            self.join_after = latest
+            self.get_logger().warning(f"robot {self.robot_id}: the run is at step {latest}; "
+                                      "rejoining the team")
         self.ready = True
         self.status_pub.publish(RobotStatus(header=convert.header(0, self.dt, self.frame_id),
                                             state=RobotStatus.STATE_READY,
@@ -227,19 +276,44 @@ class RobotNode(Node):
         self._start_pending()
 
     def _start_pending(self) -> None:
-        if not self.ready or not self.filter.done or not self.pending:
+        """Start the next step whose measurement set and team state are both in."""
+        while self.ready and self.pending and (self.evicted or self.filter.done):
+            scan = self.pending[0]
+            team = self.teams.get(scan.step)
+            if team is None:
+                return
+            self.pending.popleft()
+            ids, pos, alive = team
+            if not alive[int(np.flatnonzero(ids == self.robot_id)[0])]:
+                continue
+            if self.evicted and scan.step <= self.join_after:
+                continue  # a step of the team's, from before this robot came back
+            try:
+                if self.evicted:
+                    self.filter.rejoin(scan.step, ids, pos, alive)
+                    self.evicted = False
+                    self.power_weight = 0.0
+                    self._held.clear()
+                    self.get_logger().warning(f"robot {self.robot_id}: rejoined the team at "
+                                              f"step {scan.step}")
+                else:
+                    self.filter.observe_team(scan.step, ids, pos, alive)
+                self._forget_teams(scan.step)
+                self.position = scan.sensor
+                self.z = scan.z
+                self._sent = 0
+                out = self.filter.start_step(scan.step, scan.sensor, self.power_weight,
+                                             scan.z)
+            except (ProtocolError, ValueError) as exc:
+                self._reject("step", f"cannot start step {scan.step}: {exc}")
+                return
+            self._send(out)
+            self._after_progress()
             return
-        scan = self.pending.popleft()
-        self.position = scan.sensor
-        self.z = scan.z
-        self._sent = 0
-        try:
-            out = self.filter.start_step(scan.step, scan.sensor, self.power_weight, scan.z)
-        except (ProtocolError, ValueError) as exc:
-            self._reject("step", f"cannot start step {scan.step}: {exc}")
-            return
-        self._send(out)
-        self._after_progress()
+
+    def _forget_teams(self, step: int) -> None:
+        for old in [k for k in self.teams if k < step - 1]:
+            del self.teams[old]
 
     def _make_inbox_callback(self, kind: str):
         def callback(msg) -> None:
@@ -254,11 +328,12 @@ class RobotNode(Node):
             self._reject(kind, f"inbox/{kind}: {exc}")
             return
         self._received[msg.step] += 1
+        if self.evicted:
+            return
         # A keep-alive (a repeated state) does not hold this robot's own rounds back.
         if self.filter.receive(msg):
             self._heard = True
-        if self.filter.done:
-            return
+        # Also when the step is done: a peer's keep-alive may ask for a re-send.
         self._send(self.filter.advance())
         self._after_progress()
 
@@ -284,20 +359,30 @@ class RobotNode(Node):
         if not self.ready:
             self._check_ready()
             return
+        self._release_held()
+        if self.evicted:
+            # Still here: the world lets a robot it hears from rejoin at its next step.
+            self._publish_working(self.join_after)
+            return
         if self.filter.done:
             self._heard = False
             return
         # Liveness apart from progress: the world waits for a robot it hears from.
-        self.status_pub.publish(RobotStatus(
-            header=convert.header(self.filter.step, self.dt, self.frame_id),
-            state=RobotStatus.STATE_WORKING, robot_id=self.robot_id, step=self.filter.step))
+        self._publish_working(self.filter.step)
         if self._heard:
             self._heard = False
             return
         self._send(self.filter.tick())
         self._after_progress()
 
+    def _publish_working(self, step: int) -> None:
+        self.status_pub.publish(RobotStatus(
+            header=convert.header(max(step, 0), self.dt, self.frame_id),
+            state=RobotStatus.STATE_WORKING, robot_id=self.robot_id, step=max(step, 0)))
+
     def _after_progress(self) -> None:
+        if self.evicted:
+            return
         if self.filter.done and self.filter.step >= 0 and self._finished != self.filter.step:
             self._finish_step()
             self._start_pending()
@@ -334,6 +419,10 @@ class RobotNode(Node):
             messages_sent=self._sent, rejected_messages=sum(self.rejections.values()),
             dropped_messages=int(stats.get("dropped", 0)),
             timeouts=int(stats.get("timeouts", 0)), orphan_bins=int(stats.get("orphan_bins", 0)),
+            link_dropped=self.link.dropped, link_delayed=self.link.delayed,
+            resent=int(stats.get("resent", 0)), duplicates=int(stats.get("duplicates", 0)),
+            rejoins=int(stats.get("rejoins", 0)),
+            revived_peers=int(stats.get("revived_peers", 0)),
             dead_ids=convert.u32(sorted(f.dead))))
 
     def _local_estimates(self) -> np.ndarray:
@@ -355,10 +444,29 @@ class RobotNode(Node):
 
     # ---------------------------------------------------------------- transport
     def _send(self, envelopes: list[Envelope]) -> None:
-        for env in envelopes:
-            pub = self._peer_publisher(env.dst, _KIND[type(env.msg)])
-            pub.publish(convert.to_ros(env.msg, self.dt, self.frame_id))
-            self._sent += 1
+        """Publish envelopes to their receivers' inboxes, through the (faulty) link."""
+        now, later = self.link.route(envelopes)
+        for env in now:
+            self._publish(env)
+        self._held.extend([rounds, env] for rounds, env in later)
+        self._sent += len(envelopes)
+
+    def _publish(self, env: Envelope) -> None:
+        pub = self._peer_publisher(env.dst, _KIND[type(env.msg)])
+        pub.publish(convert.to_ros(env.msg, self.dt, self.frame_id))
+
+    def _release_held(self) -> None:
+        """One tick period passed: publish the delayed envelopes that are due."""
+        if not self._held:
+            return
+        due = []
+        for entry in self._held:
+            entry[0] -= 1
+            if entry[0] <= 0:
+                due.append(entry[1])
+        self._held = [e for e in self._held if e[0] > 0]
+        for env in due:
+            self._publish(env)
 
     def _peer_publisher(self, dst: int, kind: str):
         pub = self._peer_pubs.get((dst, kind))

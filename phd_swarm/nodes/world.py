@@ -13,9 +13,14 @@ Per step k it publishes ``/clock`` (t = k dt), the team state (``/world/robots``
   heard for ``step_timeout`` wall seconds counts as dead (the world stops scanning and
   moving it, and says so in the team state). A robot blocked on a dead peer keeps saying
   it is alive until its protocol times that peer out, so it is never taken for dead; the
-  config check keeps ``step_timeout`` >= 3 ``tick_period`` s;
+  config check keeps ``step_timeout`` >= 3 ``tick_period`` s. A robot counted dead that is
+  heard from again (it was only slow, or its process was restarted and reports ``READY``)
+  is alive again from the next step (it rejoins, :mod:`phd_swarm.nodes.robot`); a
+  ``READY`` from a robot the world counts alive mid-run means its process restarted: it is
+  counted dead at once and rejoins at the next step;
 - realtime: steps follow a wall-clock timer at ``dt / realtime_factor``; a robot that has
-  not reported keeps its last goal.
+  not reported keeps its last goal, and one not heard from at all for ``step_timeout``
+  counts as dead (and may rejoin, as in lockstep).
 
 Before step 0 the world publishes the initial team state and waits for every robot's
 ``READY`` status and for ``observers`` subscribers on the truth, logging how many are ready
@@ -92,6 +97,10 @@ class WorldNode(Node):
         self.exit_code = 0
         #: Wall time (monotonic) at which each robot was last heard from (any status).
         self.heard: dict[int, float] = {}
+        #: Dead robots heard from again: alive from the next step. And rejoins so far.
+        self.returning: set[int] = set()
+        self.rejoins: dict[int, int] = {}
+        self._revived: dict[int, float] = {}
         self._phase = "waiting"
         self._phase_since = time.monotonic()
         self._ready_progress = (0, self._phase_since)
@@ -135,6 +144,13 @@ class WorldNode(Node):
         k = w.step_index
         self._current = k
         self.reported = set()
+        for r in sorted(self.returning):
+            w.revive(r)
+            self.dead.discard(r)
+            self._revived[r] = time.monotonic()
+            self.rejoins[r] = self.rejoins.get(r, 0) + 1
+            self.get_logger().warning(f"world: robot {r} rejoins the team at step {k}")
+        self.returning.clear()
         self.clock_pub.publish(ClockMsg(clock=convert.stamp(k, self.dt)))
         if k > 0:
             self._publish_team(k)
@@ -172,6 +188,16 @@ class WorldNode(Node):
             self._reject(f"robot {topic_id}: unknown status state {msg.state}")
             return
         self.heard[topic_id] = time.monotonic()
+        if msg.state == RobotStatus.STATE_READY and self._phase == "stepping" \
+                and topic_id not in self.dead:
+            self._kill({topic_id}, "restarted (it reported READY again)")
+            if self.params["mode"] == "lockstep":
+                self._maybe_finish_step()
+        if topic_id in self.dead and self._phase in ("stepping", "waiting") \
+                and topic_id not in self.returning:
+            self.returning.add(topic_id)
+            self.get_logger().warning(f"world: robot {topic_id} is back; it rejoins at the "
+                                      "next step")
         if msg.state == RobotStatus.STATE_READY:
             self.ready.add(topic_id)
             return
@@ -233,21 +259,40 @@ class WorldNode(Node):
         waited = time.monotonic() - self._phase_since
         if self._phase == "waiting":
             self._wait_for_team()
-        elif self._phase == "stepping" and self.params["mode"] == "lockstep":
-            timeout = self.params["step_timeout"]
-            if waited >= timeout:
-                now = time.monotonic()
-                silent = {r for r in self._live() - self.reported
-                          if now - max(self.heard.get(r, 0.0), self._phase_since) >= timeout}
-                if silent:
-                    self._kill(silent, f"did not report step {self._current} and was not "
-                                       f"heard from for {timeout} s")
-                    self._maybe_finish_step()
+        elif self._phase == "stepping":
+            self._kill_silent()
         elif self._phase == "lingering" and waited >= self.params["linger"]:
             for pub in (self.team_pub, self.truth_pub, self.clock_pub):
                 pub.wait_for_all_acked(Duration(seconds=5.0))
             self._phase = "finished"
             self.finished = True
+
+    def _kill_silent(self) -> None:
+        """Count dead the live robots not heard from for ``step_timeout`` wall seconds.
+
+        Lockstep: of those that have not reported the current step, silent since the step
+        began. Real time: any live robot silent since stepping began, for ``step_timeout``
+        or two step periods, whichever is longer (a late robot that still sends statuses
+        keeps its last goal, a silent one is taken out and may rejoin).
+        """
+        timeout = self.params["step_timeout"]
+        now = time.monotonic()
+        lockstep = self.params["mode"] == "lockstep"
+        since = self._phase_since if lockstep else self._started_wall
+        if not lockstep:
+            # An idle robot is heard once per step (its report): allow two step periods.
+            timeout = max(timeout, 2.0 * self.dt / self.params["realtime_factor"])
+        if now - since < timeout:
+            return
+        waiting = self._live() - self.reported if lockstep else self._live()
+        silent = {r for r in waiting
+                  if now - max(self.heard.get(r, 0.0), since, self._revived.get(r, 0.0))
+                  >= timeout}
+        if silent:
+            self._kill(silent, f"did not report step {self._current} and was not heard from "
+                               f"for {timeout} s")
+            if lockstep:
+                self._maybe_finish_step()
 
     def _wait_for_team(self) -> None:
         """Start step 0 once the team is ready; give up honestly if it stops coming up."""

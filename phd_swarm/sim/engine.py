@@ -8,6 +8,10 @@ fast engine of parameter sweeps.
 
 One step k:
 
+0. every live robot learns the world's membership (ids, positions q^k, alive flags:
+   :meth:`RobotFilter.observe_team`), so a robot killed is declared dead at once and a
+   robot revived (:meth:`InMemoryEngine.revive`, :meth:`RobotFilter.rejoin`) is admitted
+   again;
 1. the world gives each live robot its measurement set Z^k at its position q^k;
 2. the robots run one protocol step (:class:`phd_swarm.core.protocol.robot.RobotFilter`),
    messages being delivered until every live robot is done (rounds without progress are
@@ -17,17 +21,30 @@ One step k:
 
 With ``reference=True`` a :class:`CentralPhdFilter` is fed the same measurement sets in
 robot-id order, for the equivalence tests.
+
+Lossy links (``faults``, a :class:`~phd_swarm.core.protocol.faults.LinkFaults`): every
+envelope a robot sends goes through that robot's
+:class:`~phd_swarm.core.protocol.faults.FaultyLink`, which drops it, delays it by whole
+rounds or lets it through. The delivery then runs in rounds, each one pass in which every
+message due is handed out and its receivers advance; a round in which nothing is due is a
+round without progress, in which every waiting robot ticks (keep-alives, which their peers
+answer with re-sends, and timeouts). A message delayed by d rounds is handed out d rounds
+after the round it would have arrived in; one still held when the step ends arrives during
+the next step (and is dropped there as stale). Per step, :class:`StepTraffic` counts the
+envelopes dropped and delayed.
 """
 
 from __future__ import annotations
 
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
+from itertools import groupby
 
 import numpy as np
 
 from phd_swarm.core.central import CentralPhdFilter
 from phd_swarm.core.controller import ControllerConfig, as_controller, decide
+from phd_swarm.core.protocol.faults import FaultyLink, LinkFaults
 from phd_swarm.core.protocol.messages import Envelope, Message, TransferKind, TransferMsg
 from phd_swarm.core.protocol.robot import FilterContext, RobotFilter
 from phd_swarm.core.scan import Scan
@@ -53,11 +70,23 @@ def message_type(msg: Message) -> str:
 
 @dataclass
 class StepTraffic:
-    """Messages and bytes received by each robot during one step, by type."""
+    """Messages and bytes received by each robot during one step, by type.
+
+    Attributes
+    ----------
+    messages, bytes : dict of int to Counter
+        Receiver id -> message type -> count or estimated bytes.
+    lost : int
+        Messages from or to a killed robot.
+    dropped, delayed : int
+        Envelopes the lossy links dropped and delayed (``faults``; 0 without).
+    """
 
     messages: dict[int, Counter] = field(default_factory=lambda: defaultdict(Counter))
     bytes: dict[int, Counter] = field(default_factory=lambda: defaultdict(Counter))
     lost: int = 0
+    dropped: int = 0
+    delayed: int = 0
 
 
 class InMemoryEngine:
@@ -75,11 +104,15 @@ class InMemoryEngine:
         Also run the centralised reference filter on the same measurement sets.
     timeout_ticks : int
         Rounds without progress before a robot declares a silent peer dead.
+    faults : LinkFaults, optional
+        Drop and delay the robots' messages (one
+        :class:`~phd_swarm.core.protocol.faults.FaultyLink` per sender, seeded with
+        ``[faults.seed, robot id]``). None: perfect links.
     """
 
     def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd",
                  delivery_seed: int | None = None, reference: bool = False,
-                 timeout_ticks: int = 3) -> None:
+                 timeout_ticks: int = 3, faults: LinkFaults | None = None) -> None:
         self.scenario = scenario
         self.controller = controller = as_controller(controller,
                                                      scenario.models.detection.radius)
@@ -96,10 +129,20 @@ class InMemoryEngine:
             robot.initialise(ids, positions)
         self.power_weights = {int(i): 0.0 for i in ids}
         self.killed: set[int] = set()
+        #: Killed robots the team has not yet seen dead at the start of a step.
+        self._unseen_dead: set[int] = set()
         self.central = CentralPhdFilter(self.grid, scenario.models) if reference else None
         self._rng = None if delivery_seed is None else np.random.default_rng(delivery_seed)
         self.traffic: list[StepTraffic] = []
         self.last_scans: dict[int, np.ndarray] = {}
+        self.faults = faults
+        self.links = None if faults is None else {
+            int(i): FaultyLink.for_sender(faults, int(i)) for i in ids}
+        #: Rounds of the lossy delivery so far, the envelopes due next round, and the
+        #: delayed ones by the round they are due in.
+        self._rounds = 0
+        self._next: list[Envelope] = []
+        self._held: dict[int, list[Envelope]] = defaultdict(list)
 
     # ------------------------------------------------------------------ control
     @property
@@ -110,7 +153,37 @@ class InMemoryEngine:
     def kill(self, robot_id: int) -> None:
         """Stop a robot: it no longer scans, moves, sends or receives."""
         self.killed.add(int(robot_id))
+        self._unseen_dead.add(int(robot_id))
         self.world.kill(int(robot_id))
+
+    def revive(self, robot_id: int, restart: bool = False) -> None:
+        """Bring a killed robot back: it rejoins the team at the next step.
+
+        Call it between steps. The world scans and moves the robot again from the next
+        step, and its filter rejoins (:meth:`RobotFilter.rejoin`) from the world's team
+        state at that step: with ``restart=True`` a fresh :class:`RobotFilter` (a restarted
+        process), else the old one (a robot that was only slow, stopped wherever it was).
+        Its power weight starts from 0 again.
+
+        Raises
+        ------
+        ValueError
+            If the robot is not dead, or the team has not yet seen it dead (no step has
+            started since it was killed).
+        """
+        rid = int(robot_id)
+        if rid not in self.killed:
+            raise ValueError(f"robot {rid} is not dead")
+        if rid in self._unseen_dead:
+            raise ValueError(f"robot {rid} was killed after the last step started; run a "
+                             f"step without it before reviving it")
+        self.killed.discard(rid)
+        self.world.revive(rid)
+        if restart:
+            self.robots[rid] = RobotFilter(rid, self.ctx)
+        self.power_weights[rid] = 0.0
+        self.robots[rid].rejoin(self.world.step_index, self.world.robot_ids,
+                                self.world.robot_positions, self.world.alive)
 
     def live_ids(self) -> list[int]:
         """Ids of the robots not killed, ascending."""
@@ -123,12 +196,16 @@ class InMemoryEngine:
         positions = dict(zip(self.world.robot_ids.tolist(), self.world.robot_positions,
                              strict=True))
         traffic = StepTraffic()
+        self._announce_team(k)
         queue: list[Envelope] = []
         for rid in self.live_ids():
             z = scans.get(rid, np.empty((0, 2)))
             queue.extend(self.robots[rid].start_step(k, positions[rid], self.power_weights[rid],
                                                       z))
-        self._deliver(queue, traffic)
+        if self.links is None:
+            self._deliver(queue, traffic)
+        else:
+            self._deliver_lossy(queue, traffic)
         self.traffic.append(traffic)
         goals = {}
         for rid in self.live_ids():
@@ -144,6 +221,15 @@ class InMemoryEngine:
                                for rid in sorted(scans)])
         self.world.apply_goals(goals)
         self.world.advance()
+
+    def _announce_team(self, k: int) -> None:
+        """Step 0 of a step: give every live robot the world's membership (its team state)."""
+        alive = self.world.alive
+        ids = self.world.robot_ids
+        positions = self.world.robot_positions
+        for rid in self.live_ids():
+            self.robots[rid].observe_team(k, ids, positions, alive)
+        self._unseen_dead.clear()
 
     def run(self, steps: int | None = None) -> None:
         """Run ``steps`` steps (default: the rest of the scenario)."""
@@ -186,6 +272,58 @@ class InMemoryEngine:
                                     f"{limit} rounds without progress: {phases}")
             for rid in waiting:
                 queue.extend(robots[rid].tick())
+
+    def _deliver_lossy(self, initial: list[Envelope], traffic: StepTraffic) -> None:
+        """:meth:`_deliver` through the lossy links, round by round.
+
+        Each round hands out every envelope due (in random order with a delivery seed) and
+        advances the receivers; what they send is routed through the senders' links, due
+        next round or ``d`` rounds later, or dropped. A round with nothing due is a round
+        without progress: the waiting robots tick. A :class:`DeadlockError` is raised after
+        ``4 timeout_ticks + 8 + max_delay_rounds`` such rounds in a row in which no robot
+        got further (:attr:`RobotFilter.progress`), which the robots' own timeouts rule out
+        unless the protocol is broken.
+        """
+        robots = self.robots
+        assert self.faults is not None
+        limit = 4 * self.ctx.timeout_ticks + 8 + self.faults.max_delay_rounds
+        stalls, marker = 0, None
+        self._route(initial, traffic)
+        while True:
+            self._rounds += 1
+            batch, self._next = self._next, []
+            batch.extend(self._held.pop(self._rounds, ()))
+            if batch:
+                if self._rng is not None:
+                    batch = [batch[i] for i in self._rng.permutation(len(batch))]
+                for dst in self._hand_out(batch, traffic):
+                    self._route(robots[dst].advance(), traffic)
+                continue
+            waiting = [rid for rid in self.live_ids() if not robots[rid].done]
+            if not waiting:
+                return
+            now = [robots[rid].progress for rid in waiting]
+            stalls = stalls + 1 if now == marker else 1
+            marker = now
+            if stalls > limit:
+                phases = {rid: robots[rid].phase.value for rid in waiting}
+                raise DeadlockError(f"step {self.world.step_index}: robots still waiting after "
+                                    f"{limit} rounds without progress: {phases}")
+            for rid in waiting:
+                self._route(robots[rid].tick(), traffic)
+
+    def _route(self, out: list[Envelope], traffic: StepTraffic) -> None:
+        """Send robots' envelopes through their senders' links (due next round or later)."""
+        links = self.links
+        assert links is not None
+        for src, group in groupby(out, key=lambda e: e.src):
+            envelopes = list(group)
+            now, later = links[src].route(envelopes)
+            self._next.extend(now)
+            for d, envelope in later:
+                self._held[self._rounds + 1 + d].append(envelope)
+            traffic.delayed += len(later)
+            traffic.dropped += len(envelopes) - len(now) - len(later)
 
     def _hand_out(self, batch: list[Envelope], traffic: StepTraffic) -> dict[int, None]:
         """Buffer each message at its receiver and count it; return the receivers.

@@ -157,6 +157,14 @@ class World:
         """Mark a robot dead: from now on it gets no scans and does not move."""
         self._alive[self._check_id(robot_id)] = False
 
+    def revive(self, robot_id: int) -> None:
+        """Mark a dead robot alive again: from the next step on it is scanned and moves.
+
+        It starts from where it died (dead robots do not move). Reviving a live robot does
+        nothing.
+        """
+        self._alive[self._check_id(robot_id)] = True
+
     def _check_id(self, robot_id: int) -> int:
         if (isinstance(robot_id, bool) or not isinstance(robot_id, (int, np.integer))
                 or not 0 <= robot_id < self.scenario.robots):

@@ -78,6 +78,14 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="off",
                    help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
                         f"{AUTO_SERVER_PROCESSES} processes)")
+    p.add_argument("--drop", type=float, metavar="P",
+                   help="fault injection: lose each protocol message with probability P")
+    p.add_argument("--delay", type=float, metavar="P",
+                   help="fault injection: hold back each protocol message not lost with "
+                        "probability P, 1..--delay-rounds tick periods")
+    p.add_argument("--delay-rounds", type=int, metavar="N", help="most tick periods a "
+                   "delayed message is held back (default 1)")
+    p.add_argument("--fault-seed", type=int, metavar="S", help="seed of the fault draws")
     p.add_argument("--no-record", action="store_true", help="do not write run.mcap")
     p.add_argument("--record-inboxes", action="store_true",
                    help="also record the protocol traffic (/robot_*/inbox/*) in run.mcap")
@@ -110,6 +118,10 @@ def resolve(opts: argparse.Namespace) -> RunConfig:
     except ValueError as exc:
         raise ValueError(f"{opts.config}: command-line override: {exc}") from None
     robot = {"controller": opts.controller} if opts.controller else {}
+    for option, param in (("drop", "fault_drop"), ("delay", "fault_delay"),
+                          ("delay_rounds", "fault_delay_rounds"), ("fault_seed", "fault_seed")):
+        if getattr(opts, option) is not None:
+            robot[param] = getattr(opts, option)
     world = {"mode": "realtime"} if opts.realtime else {}
     return rc.with_overrides(scenario, robot=robot, world=world)
 

@@ -6,6 +6,8 @@ import json
 import subprocess
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -58,3 +60,24 @@ def test_bench_engines_quick_compares_the_two_engines(tmp_path):
         assert r["distributed_steps_per_s"] > 0 and r["central_steps_per_s"] > 0
         # Same trial, same steps: the two engines agree (tests bound this at every step).
         assert r["max_phd_difference_rel"] <= 1e-9 and r["max_position_difference_m"] <= 1e-9
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "recorder", "--quick",
+                             "--interrupt-after", "2", "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=600, check=False)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(next(tmp_path.glob("recorder-*.json")).read_text())
+    runs = data["results"]["runs"]
+    assert [r["inboxes_recorded"] for r in runs] == [False, True]
+    for r in runs:
+        assert r["steps"] == 20 and r["step_messages_missing"] == 0
+        assert r["step_messages_recorded"] == r["step_messages_expected"] > 0
+        assert r["recorder_ms_per_message"] > 0 and r["startup_s"] is not None
+    # The protocol traffic is most of what a run sends.
+    assert runs[1]["recorder_messages"] > 2 * runs[0]["recorder_messages"]
+    (stop,) = data["results"]["interrupts"]
+    assert stop["exit_code"] == 130 and stop["processes_left"] == 0
+    assert "| ms / msg |" in result.stdout

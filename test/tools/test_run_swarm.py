@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import time
@@ -224,3 +225,139 @@ def test_ctrl_c_stops_every_process_of_the_run(tmp_path, children):
     info = summarize(run / "run.mcap")
     assert not info.truncated, "the recorder closed the log on Ctrl-C"
     print(f"run_swarm stopped {stopped:.1f} s after Ctrl-C")
+
+
+def _fast_timeouts(tmp_path: Path) -> Path:
+    """dames_static.yaml with a 3 s world deadline and 1 s protocol timeouts."""
+    config = tmp_path / "fast_timeouts.yaml"
+    config.write_text(Path(CONFIG).read_text().replace(
+        "    step_timeout: 15.0", "    step_timeout: 3.0").replace(
+        "    controller: phd", "    controller: phd\n    tick_period: 0.2\n"
+        "    timeout_ticks: 5").replace("progress_every: 20", "progress_every: 2"))
+    return config
+
+
+def _wait_for(path: Path, text: str, proc, timeout: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not (path.exists() and text in path.read_text()):
+        assert proc.poll() is None, f"the run ended before {text!r} appeared in {path}"
+        assert time.monotonic() < deadline, f"{text!r} did not appear in {path}"
+        time.sleep(0.1)
+
+
+def _rejoin_and_stop(run: Path, robot: int, proc) -> int:
+    """Wait until ``robot`` rejoined and 20 more steps were scored, then Ctrl-C the run.
+
+    The run is long (2000 steps): waiting for the event and then interrupting does not race
+    the end of the run, however slowly the robot comes back. Returns the rejoin step.
+    """
+    world, monitor = run / "logs" / "world.log", run / "logs" / "monitor.log"
+    _wait_for(world, f"robot {robot} rejoins the team at step", proc, timeout=180.0)
+    step = int(re.search(rf"robot {robot} rejoins the team at step (\d+)",
+                         world.read_text()).group(1))
+    deadline = time.monotonic() + 120.0
+    while not any(int(k) >= step + 20 for k in re.findall(r"step (\d+)/", monitor.read_text())):
+        assert proc.poll() is None and time.monotonic() < deadline, "the team stopped"
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=60.0)
+    return step
+
+
+def _assert_rejoined(run: Path, robot: int, step: int) -> None:
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["steps"] >= step + 20
+    assert summary["dead_robots"] == [] and summary["rejoined_robots"] == [robot]
+    world = (run / "logs" / "world.log").read_text()
+    assert [line for line in world.splitlines() if "counts as dead" in line
+            and f"robot {robot} " not in line] == [], "only the stopped robot was dead"
+    statuses = [r.msg for r in read_messages(run / "run.mcap",
+                                             topics=[f"/robot_{robot}/status"])
+                if r.msg.state == RobotStatus.STATE_STEP_DONE]
+    after = [m for m in statuses if m.step >= step]
+    assert [m.step for m in after[:20]] == list(range(step, step + 20)), "it steps again"
+    assert after[0].rejoins >= 1 and after[-1].owned_bins > 0
+    metrics = {r.msg.step: r.msg for r in read_messages(run / "run.mcap",
+                                                        topics=["/monitor/metrics"])}
+    assert metrics[step + 19].robots_reported == metrics[step + 19].robots_alive == ROBOTS
+    revived = [r.msg.revived_peers for r in read_messages(
+        run / "run.mcap", topics=[f"/robot_{i}/status" for i in range(ROBOTS) if i != robot])
+        if r.msg.state == RobotStatus.STATE_STEP_DONE]
+    assert max(revived) >= 1, "the others admitted it again"
+
+
+def _start_long(children, config: Path, out: Path, name: str):
+    return children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
+                           "1000", "--seed", "5", "--out", str(out), "--name", name])
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_a_restarted_robot_process_rejoins_the_team(tmp_path, children):
+    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, "restart")
+    run = tmp_path / "restart"
+    _wait_for(run / "logs" / "monitor.log", "step 11/", proc)
+    pid = _pid_of(run, 2)
+    assert pid is not None
+    os.kill(pid, signal.SIGKILL)
+    _wait_for(run / "logs" / "world.log", "robot 2 did not report", proc)
+    again = children.start([str(ROOT / "scripts" / "run_robot.sh"), "2",
+                            str(run / "config.yaml")])
+    step = _rejoin_and_stop(run, 2, proc)
+    children.stop(again)
+    _assert_rejoined(run, 2, step)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_a_robot_that_was_only_slow_rejoins_the_team(tmp_path, children):
+    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, "slow")
+    run = tmp_path / "slow"
+    _wait_for(run / "logs" / "monitor.log", "step 11/", proc)
+    pid = _pid_of(run, 1)
+    assert pid is not None
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        _wait_for(run / "logs" / "world.log", "robot 1 did not report", proc)
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    step = _rejoin_and_stop(run, 1, proc)
+    _assert_rejoined(run, 1, step)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_the_team_steps_through_lossy_links(tmp_path, children):
+    """5 % of the protocol messages lost and 5 % held back: nobody is taken for dead."""
+    config = _fast_timeouts(tmp_path)
+    steps = 40
+    proc = children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
+                           str(steps * 0.5), "--seed", "5", "--out", str(tmp_path), "--name",
+                           "lossy", "--drop", "0.05", "--delay", "0.05", "--delay-rounds", "2",
+                           "--fault-seed", "3", "--quiet"])
+    _finish(children, proc)
+    run = tmp_path / "lossy"
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["steps"] == steps and summary["complete"]
+    assert summary["dead_robots"] == [] and summary["log_completeness"]["complete"]
+    params = (run / "config.yaml").read_text()
+    assert "fault_drop: 0.05" in params and "fault_delay_rounds: 2" in params
+    last = {}
+    for r in read_messages(run / "run.mcap", topics=[f"/robot_{i}/status"
+                                                     for i in range(ROBOTS)]):
+        if r.msg.state == RobotStatus.STATE_STEP_DONE:
+            last[r.msg.robot_id] = r.msg
+    assert sorted(last) == list(range(ROBOTS))
+    assert all(m.step == steps - 1 and m.timeouts == 0 and not m.dead_ids
+               for m in last.values())
+    assert sum(m.link_dropped for m in last.values()) > 0
+    assert sum(m.link_delayed for m in last.values()) > 0
+    assert sum(m.resent for m in last.values()) > 0, "lost messages were sent again"
+
+
+def test_bad_fault_options_are_refused_before_anything_starts(tmp_path):
+    res = subprocess.run([RUN_SWARM, CONFIG, "--drop", "1.5", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+    assert res.returncode == 2 and "fault_drop" in res.stderr and "<= 1.0" in res.stderr
+    assert not any(tmp_path.iterdir())

@@ -42,16 +42,52 @@ A field-of-view bin outside every known cell would mean an unknown robot owns it
 counted in ``stats['uncovered_fov_bins']`` (zero in every test run).
 
 Failures: every wait counts :meth:`tick` s (rounds without progress). A robot that waits
-re-sends its state of the step to its contacts on every tick, a keep-alive: a peer that is
-itself blocked (on a robot that died) is slow, not dead. After ``timeout_ticks`` rounds the
-awaited robots from which nothing at all arrived in the last ``timeout_ticks`` rounds are
-declared dead, dropped from every set, and the step goes on with what arrived; after
-``3 x timeout_ticks`` rounds without progress every awaited robot is (a wait that cannot
-end). Bins that a robot owns but nobody handed to it (those
+re-sends its state of the step on every tick, a keep-alive, to the peers it waits for
+(twice from the second tick of a wait on) and to the peers whose keep-alives it received
+lately (they may be waiting for it): a peer that is itself blocked (on a robot that died)
+is slow, not dead. The awaited robots from which nothing at all arrived in the last
+``timeout_ticks`` rounds of the wait are declared dead (so after ``timeout_ticks + 1``
+rounds at the earliest), dropped from every set, and the step goes on with what arrived;
+after ``3 x timeout_ticks`` rounds without progress every awaited robot is (a wait that
+cannot end). Bins that a robot owns but nobody handed to it (those
 of a dead robot) are re-initialised to the prior mass ``models.initial_density *
 bin_area`` (and alpha = n = 0) and counted in ``stats['orphan_bins']``. Bins of the previous
 cell that the partition gives to a robot that died during the step (its state arrived, its
 cell did not) are dropped and counted in ``stats['lost_to_dead']``.
+
+Lost messages: a keep-alive is also a request. A robot keeps the envelopes it sent in the
+current and the previous step (not its states). A keep-alive, a state of a step the
+receiver has sent messages in that repeats one it holds or comes after it finished that
+step, is answered (by the next :meth:`advance`, ``stats['resent']``) with what the
+receiver sent that peer in that step and the peer may still miss: a robot sends the
+messages of a phase only once it holds the previous phase's from all its contacts, so the
+peer's own messages show which phases it is past (:func:`_may_miss`). With nothing to
+re-send, a receiver that is itself still in that step answers with its own state, at most
+once per round and peer (the peer may lack it, and hears that it is alive). States are
+never re-sent as answers otherwise: an answered state could be answered again. So
+transports call :meth:`advance` after every :meth:`receive`, also when the step is done. A
+message that arrives again is not applied again: the first copy of each (step, kind,
+sender) is kept, and the repeat is counted in ``stats['duplicates']``. Any message from a
+peer counts as hearing from it. A run without losses has no rounds without progress, hence
+no keep-alives and no re-sends: it sends exactly the messages it did before. With every
+message arriving in the end and no peer timed out, the result is bit-identical to the
+loss-free run (all sums in robot-id order). :mod:`.faults` injects the losses.
+
+Membership and rejoining: at the start of a step the transport may give every robot the
+world's team state (ids, positions, alive flags) with :meth:`RobotFilter.observe_team`.
+Robots the world says are dead are declared dead at once (``stats['world_dead']``, no
+timeouts spent on them); robots declared dead that the world says are alive are admitted
+again (``stats['revived_peers']``) and become contacts when the configuration of the live
+robots at that step makes them contacts (the rule of :meth:`RobotFilter.initialise`,
+symmetric in each pair). A robot that comes back (a restarted process, or one that was
+only slow) calls :meth:`RobotFilter.rejoin` with the same team state: it drops its bins and
+whatever step it was in, takes its contacts from the same rule, and owns nothing, so the
+step's hand-over gives it its bins from their previous owners (``stats['rejoins']``). A
+live robot declared dead on lost messages is admitted again the same way at the next step.
+A robot whose state arrives from a robot that is not its contact (the contact sets
+disagree, e.g. after a one-sided death) leaves that state out and declares the sender dead
+(``stats['strangers']``); the sender times it out in turn, and at the next step both admit
+each other on the same numbers.
 
 Disagreeing partitions: while the robots' dead sets differ, or when a true neighbour was
 missing from a contact set (no local rule can rule that out: a cell can grow by tens of
@@ -330,7 +366,11 @@ class RobotFilter:
     dead : set of int
         Robots declared dead.
     stats : dict
-        Counters: ``orphan_bins``, ``timeouts``, ``dropped`` (stale or unknown messages).
+        Counters: ``orphan_bins``, ``timeouts``, ``declared_dead`` (peers timed out),
+        ``dropped`` (stale or unknown messages), ``duplicates`` (messages that arrived
+        again), ``resent`` (answers to keep-alives), ``world_dead``, ``revived_peers``,
+        ``rejoins``, ``strangers`` and those of the module docstring. A counter that
+        stayed 0 is absent.
     """
 
     def __init__(self, robot_id: int, ctx: FilterContext) -> None:
@@ -354,6 +394,15 @@ class RobotFilter:
         self._cur: _StepData | None = None
         self._mail: dict[tuple, dict[int, Message]] = defaultdict(dict)
         self._idle_ticks = 0
+        #: What this robot sent in the current and the previous step, by step (re-sent to a
+        #: peer on its keep-alive), and the re-sends :meth:`advance` returns next.
+        self._sent: dict[int, list[Envelope]] = {}
+        self._log: list[Envelope] = []
+        self._outbox: list[Envelope] = []
+        #: The round in which this robot last sent each peer its state again, and in which
+        #: each peer last sent it a keep-alive of the current step.
+        self._spoke: dict[int, int] = {}
+        self._waiters: dict[int, int] = {}
 
     # ------------------------------------------------------------------ set-up
     def initialise(self, ids: np.ndarray, positions: np.ndarray,
@@ -364,29 +413,10 @@ class RobotFilter:
         the neighbours and the 2-hop contacts for step 0. After this, only neighbour
         traffic is used.
         """
-        ids = np.asarray(ids, dtype=np.int64)
-        order = np.argsort(ids, kind="stable")
-        ids, positions = ids[order], np.asarray(positions, dtype=float)[order]
-        rho = None if power_weights is None else np.asarray(power_weights, float)[order]
-        if len(np.unique(ids)) != len(ids):
-            raise ValueError(f"robot ids must be unique, got {ids.tolist()}")
+        ids, positions, rho = _sorted_team(ids, positions, power_weights)
         if self.robot_id not in ids:
             raise ValueError(f"robot {self.robot_id} is not among the team ids {ids.tolist()}")
-        part = partition(self.ctx.grid.env, positions, rho)
-        me = int(np.searchsorted(ids, self.robot_id))
-        rho_all = np.zeros(len(ids)) if rho is None else rho
-        radii = np.array([_cell_radius(positions[j], part.cells[j]) for j in range(len(ids))])
-        self.cell = np.asarray(part.cells[me])
-        self.cell_radius = float(radii[me])
-        self.neighbours = tuple(int(ids[j]) for j in part.neighbours[me])
-        two_hop = set(self.neighbours)
-        for j in part.neighbours[me]:
-            two_hop.update(int(ids[k]) for k in part.neighbours[j])
-        near = self.ctx.contact_mask(positions[me], rho_all[me], radii[me], positions,
-                                     rho_all, radii)
-        two_hop.update(ids[near].tolist())
-        two_hop.discard(self.robot_id)
-        self.contacts = tuple(sorted(two_hop))
+        self._take_configuration(ids, positions, rho)
         self.bins = self._owned_bins(self.cell, ids, positions,
                                      np.zeros(len(ids)) if rho is None else rho)
         self.weights = np.full(self.bins.size, self.ctx.prior_mass)
@@ -394,11 +424,160 @@ class RobotFilter:
             self.alpha = np.zeros(self.bins.size)
             self.count = np.zeros(self.bins.size)
 
+    def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
+               alive: np.ndarray | None = None) -> None:
+        """(Re)join the team at step ``step``, from the world's team state at that step.
+
+        For a robot that was declared dead (a restarted process with a fresh filter, or a
+        robot that was only slow): every bin, message and step in progress is dropped, the
+        robots the world says are dead are declared dead, and the neighbours, cell radius
+        and contacts are those of the configuration of the live robots at ``step``
+        (:meth:`initialise`'s rule, Voronoi cells). The robot owns no bins: in step ``step``
+        the partition's hand-over gives it its bins from their previous owners, and those
+        nobody hands it become orphans initialised to the prior, as after a death. The other
+        robots admit it with :meth:`observe_team` on the same numbers, so both sides of
+        every pair agree on being contacts. Call it before :meth:`start_step` of ``step``;
+        counted in ``stats['rejoins']``.
+
+        Parameters
+        ----------
+        step : int
+            The step the robot takes part in next; later than any step it started.
+        ids : np.ndarray of int, shape (R,)
+            The team's robot ids (the world's ``TeamState``).
+        positions : np.ndarray, shape (R, 2)
+            Their positions at ``step`` [m] (those of dead robots are not used).
+        alive : np.ndarray of bool, shape (R,), optional
+            Which robots the world says are alive (default: all); this one must be.
+
+        Raises
+        ------
+        ValueError
+            For a step not after the last one started, a team state without this robot
+            alive, or repeated ids.
+        """
+        if step <= self._last_step:
+            raise ValueError(f"robot {self.robot_id}: cannot rejoin at step {step}, it "
+                             f"already started step {self._last_step}")
+        ids, positions, alive = _team_state(ids, positions, alive)
+        live = ids[alive]
+        if self.robot_id not in live:
+            raise ValueError(f"robot {self.robot_id}: the team state of step {step} does not "
+                             f"list it alive ({live.tolist()})")
+        self.dead = set(ids[~alive].tolist())
+        self._take_configuration(live, positions[alive], None)
+        self.bins = np.empty(0, dtype=np.int64)
+        self.weights = np.empty(0)
+        self.alpha = np.empty(0) if self.ctx.cumulative else None
+        self.count = np.empty(0) if self.ctx.cumulative else None
+        self.phase = Phase.IDLE
+        self._last_step = step - 1
+        self._cur = None
+        self._retained = None
+        self._mail.clear()
+        self._heard.clear()
+        self._idle_ticks = 0
+        self._sent, self._log, self._outbox, self._spoke, self._waiters = {}, [], [], {}, {}
+        self.stats["rejoins"] += 1
+        _log.info("robot %d rejoins the team at step %d with contacts %s", self.robot_id,
+                  step, list(self.contacts))
+
+    def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
+                     alive: np.ndarray) -> None:
+        """Take the world's membership at the start of step ``step``.
+
+        Robots the world says are dead are declared dead at once (``stats['world_dead']``;
+        no timeouts spent on them). Robots declared dead that the world says are alive (a
+        robot that rejoined, see :meth:`rejoin`, or one declared dead on lost messages) are
+        admitted again (``stats['revived_peers']``), and become contacts when the
+        configuration of the live robots at ``step`` makes them contacts of this robot
+        (:meth:`initialise`'s rule, symmetric: the other robot decides on the same numbers).
+        Call it before :meth:`start_step` of ``step``; with everybody alive and nobody
+        declared dead it does nothing.
+
+        Parameters
+        ----------
+        step : int
+            The step about to start.
+        ids : np.ndarray of int, shape (R,)
+            The team's robot ids.
+        positions : np.ndarray, shape (R, 2)
+            Their positions at ``step`` [m].
+        alive : np.ndarray of bool, shape (R,)
+            Which robots the world says are alive.
+        """
+        alive = np.asarray(alive, dtype=bool)
+        if not self.dead and alive.all():
+            return
+        ids, positions, alive = _team_state(ids, positions, alive)
+        gone = set(ids[~alive].tolist()) - self.dead - {self.robot_id}
+        if gone:
+            self.stats["world_dead"] += len(gone)
+            _log.warning("robot %d: the world says %s are dead at step %d; declared dead",
+                         self.robot_id, sorted(gone), step)
+            self._declare_dead(gone)
+        back = self.dead & set(ids[alive].tolist())
+        if not back or self.robot_id not in ids[alive]:
+            return
+        self.dead -= back
+        self.stats["revived_peers"] += len(back)
+        near = set(self._configuration_contacts(ids[alive], positions[alive])) & back
+        self.contacts = tuple(sorted(set(self.contacts) | near))
+        _log.info("robot %d: %s alive again at step %d; contacts among them: %s",
+                  self.robot_id, sorted(back), step, sorted(near))
+
+    def _configuration_contacts(self, ids: np.ndarray, positions: np.ndarray) -> tuple:
+        """The own contacts in the Voronoi configuration of robots ``ids`` (ascending)."""
+        part = partition(self.ctx.grid.env, positions)
+        me = int(np.searchsorted(ids, self.robot_id))
+        return self._contacts_in(ids, positions, np.zeros(len(ids)), part, me)[2]
+
+    def _take_configuration(self, ids: np.ndarray, positions: np.ndarray,
+                            rho: np.ndarray | None) -> None:
+        """Cell, radius, neighbours and contacts in the configuration (``ids`` ascending)."""
+        part = partition(self.ctx.grid.env, positions, rho)
+        me = int(np.searchsorted(ids, self.robot_id))
+        rho_all = np.zeros(len(ids)) if rho is None else rho
+        radius, neighbours, contacts = self._contacts_in(ids, positions, rho_all, part, me)
+        self.cell = np.asarray(part.cells[me])
+        self.cell_radius = radius
+        self.neighbours = neighbours
+        self.contacts = contacts
+
+    def _contacts_in(self, ids: np.ndarray, positions: np.ndarray, rho: np.ndarray, part,
+                     me: int) -> tuple[float, tuple[int, ...], tuple[int, ...]]:
+        """Cell radius, neighbours and contacts of row ``me`` of a partition of ``ids``.
+
+        The rule of the initial configuration: the neighbours, their neighbours, and every
+        robot within :meth:`FilterContext.contact_mask`'s bound (symmetric in each pair).
+        """
+        radii = np.array([_cell_radius(positions[j], part.cells[j]) for j in range(len(ids))])
+        neighbours = tuple(int(ids[j]) for j in part.neighbours[me])
+        two_hop = set(neighbours)
+        for j in part.neighbours[me]:
+            two_hop.update(int(ids[k]) for k in part.neighbours[j])
+        near = self.ctx.contact_mask(positions[me], rho[me], radii[me], positions, rho, radii)
+        two_hop.update(ids[near].tolist())
+        two_hop.discard(self.robot_id)
+        return float(radii[me]), neighbours, tuple(sorted(two_hop))
+
     # --------------------------------------------------------------- interface
     @property
     def done(self) -> bool:
         """Whether the current step is finished (or no step has started)."""
         return self.phase in (Phase.DONE, Phase.IDLE)
+
+    @property
+    def progress(self) -> tuple[int, str, int, int]:
+        """A value that changes whenever this robot gets further in its step (watchdogs).
+
+        The step, the phase, and within the update the active ids still pending and the
+        partial sums sent; equal values mean no progress in between.
+        """
+        cur = self._cur
+        if cur is None:
+            return (self._last_step, self.phase.value, 0, 0)
+        return (cur.step, self.phase.value, len(cur.pending), len(cur.partial_sent))
 
     @property
     def step(self) -> int:
@@ -420,6 +599,11 @@ class RobotFilter:
                 and np.isfinite(power_weight) and power_weight >= 0):
             raise ValueError(f"robot {self.robot_id}: non-finite position, measurement or "
                              f"power weight at step {step}")
+        previous = self._sent.get(self._last_step)
+        self._sent = {} if previous is None else {self._last_step: previous}
+        self._log = self._sent[step] = []
+        if self._waiters:
+            self._waiters = {}
         self._last_step = step
         self._cur = _StepData(step=step, position=position, power_weight=float(power_weight),
                               z=z)
@@ -437,7 +621,15 @@ class RobotFilter:
 
         Any message from a live peer, even one dropped as stale, shows that the peer is
         alive (see :meth:`tick`). Returns whether the message is new: False when it is
-        dropped, or repeats one already held (a keep-alive).
+        dropped, or repeats one already held (a keep-alive, or a message re-sent after a
+        loss: the first copy is kept, so a duplicate is never applied twice).
+
+        A repeated state of the current or the previous step (finished or not) is a
+        keep-alive of a peer that still waits: the answer (what this robot sent that peer
+        in that step and it may still miss, or this robot's own state, see
+        :meth:`_resend`) is queued, and the next :meth:`advance` returns it. Transports
+        must therefore call :meth:`advance` after every :meth:`receive`, also when the step
+        is done.
         """
         src, key = _mail_route(msg)
         if src in self.dead or src == self.robot_id:
@@ -447,16 +639,31 @@ class RobotFilter:
         step = msg.step
         if step < self._last_step or (self._cur is not None and step == self._last_step
                                       and self.phase == Phase.DONE):
+            if type(msg) is StateMsg:
+                self._resend(src, step)
             self.stats["dropped"] += 1
             return False
         box = self._mail[key]
-        if src in box and isinstance(msg, StateMsg):
+        if src in box:
+            if type(msg) is StateMsg:
+                self._resend(src, step)
+            else:
+                self.stats["duplicates"] += 1
             return False
         box[src] = msg
         return True
 
     def advance(self) -> list[Envelope]:
-        """Make as much progress as the buffered messages allow; returns what to send."""
+        """Make as much progress as the buffered messages allow; returns what to send.
+
+        Re-sends queued by :meth:`receive` (answers to keep-alives) come first.
+        """
+        if self._outbox:
+            again, self._outbox = self._outbox, []
+            return again + self._advance()
+        return self._advance()
+
+    def _advance(self) -> list[Envelope]:
         # Most messages complete nothing: leave at once while a wait is still short.
         if self._cur is None or self._waiting():
             return []
@@ -467,15 +674,42 @@ class RobotFilter:
             if (self.phase, len(self._cur.pending), len(self._cur.partial_sent)) == before:
                 break
             self._idle_ticks = 0
+        self._log.extend(out)
         return out
+
+    def _resend(self, dst: int, step: int) -> None:
+        """Answer robot ``dst``'s keep-alive of step ``step`` (a repeated state).
+
+        Queues again what this robot sent it in that step and it may still miss
+        (:func:`_may_miss`). With nothing to re-send, a robot that is itself still in that
+        step answers with its own state, at most once per round and peer: the peer may
+        lack the state, and it hears that this robot, which it may be waiting for, is
+        alive. States are not logged, so a state is never re-sent as such: an answered
+        state could be answered again, and two waiting robots would answer each other
+        for ever.
+        """
+        if step == self._last_step:
+            self._waiters[dst] = self._round
+        held = self._held_from(dst, step)
+        again = [e for e in self._sent.get(step, ()) if e.dst == dst and _may_miss(e.msg, held)]
+        if (not again and step == self._last_step and not self.done
+                and self._spoke.get(dst) != self._round):
+            assert self._cur is not None and self._cur.state is not None
+            again = [self._to(dst, self._cur.state)]
+            self._spoke[dst] = self._round
+        if again:
+            self._outbox.extend(again)
+            self.stats["resent"] += len(again)
 
     def tick(self) -> list[Envelope]:
         """One round passed without progress anywhere; time out silent peers if it is due.
 
-        Returns the keep-alives (this step's state again, to every contact) and what the
-        step sends if a timeout lets it go on. Of the awaited peers, only those silent for
-        the last ``timeout_ticks`` rounds are declared dead; after ``3 x timeout_ticks``
-        rounds without progress, all of them.
+        Returns the keep-alives (this step's state again, to every peer the robot waits
+        for; they answer with what it may miss, see :meth:`receive`) and what the step
+        sends if a timeout lets it go on. Of the awaited peers, only those silent for the
+        last ``timeout_ticks`` rounds of this wait (so after ``timeout_ticks + 1`` rounds at
+        the earliest) are declared dead; after ``3 x timeout_ticks`` rounds without
+        progress, all of them.
         """
         cur = self._cur
         if self.done or cur is None:
@@ -483,26 +717,51 @@ class RobotFilter:
         self._round += 1
         self._idle_ticks += 1
         assert cur.state is not None
-        alive = [self._to(c, cur.state) for c in self.contacts]
+        missing = self._missing()
         timeout = self.ctx.timeout_ticks
+        # Peers that sent keep-alives lately may be waiting for this robot: they hear
+        # from it every round, not only when their keep-alive and its answer both arrive.
+        waiters = {p for p, r in self._waiters.items()
+                   if self._round - r <= timeout and p not in self.dead}
+        alive = [self._to(c, cur.state) for c in sorted(missing | waiters)]
+        for e in alive:
+            self._spoke[e.dst] = self._round
+        if self._idle_ticks > 1:
+            # The first keep-alive or its answer was lost: ask twice (on a lossy link the
+            # two copies fail independently).
+            alive += [self._to(c, cur.state) for c in sorted(missing)]
         if self._idle_ticks < timeout:
             return alive
-        missing = self._missing()
         # A message taken in after tick r arrived in round r + 1's interval: silent means
-        # nothing in the last ``timeout`` intervals.
+        # nothing in the last ``timeout`` intervals, counted from the start of this wait
+        # (a peer heard just before it began has had ``timeout`` chances to answer).
+        since = self._round - self._idle_ticks
         silent = {p for p in missing
-                  if self._round - self._heard.get(p, -timeout - 1) > timeout}
+                  if self._round - max(self._heard.get(p, since), since) > timeout}
         if missing and not silent and self._idle_ticks < 3 * timeout:
             return alive
         self._idle_ticks = 0
         dead = silent or missing
         if dead:
             self.stats["timeouts"] += 1
+            self.stats["declared_dead"] += len(dead)
             _log.warning("robot %d: no answer from %s in phase %s of step %d after %d "
                          "rounds; declared dead", self.robot_id, sorted(dead),
                          self.phase.value, self._last_step, timeout)
             self._declare_dead(dead)
         return alive + self.advance()
+
+    def _held_from(self, src: int, step: int) -> set[str]:
+        """Kinds of message of step ``step`` held from robot ``src`` (see :func:`_may_miss`).
+
+        ``partial`` stands for its partial sums for this robot's update, ``total`` for its
+        totals of its own update. Empty when the step's mail is gone (a later step started).
+        """
+        mail = self._mail
+        keys = (("cell", (step, "cell")), ("own", (step, "own")),
+                ("phantom", (step, "phantom")), ("scan", (step, "scan")),
+                ("partial", (step, "partial", self.robot_id)), ("total", (step, "total", src)))
+        return {kind for kind, key in keys if src in mail.get(key, ())}
 
     # ----------------------------------------------------------------- phases
     def _progress(self) -> list[Envelope]:
@@ -586,6 +845,8 @@ class RobotFilter:
         cur = self._cur
         assert cur is not None
         states = self._mail[(cur.step, "state")]
+        if len(states) > len(self.contacts):
+            self._reject_strangers(states, set(self.contacts))
         ids = np.array(sorted(set(states) | {self.robot_id}), dtype=np.int64)
         pos = np.array([cur.position if i == self.robot_id else states[i].position
                         for i in ids], dtype=float).reshape(-1, 2)
@@ -921,6 +1182,10 @@ class RobotFilter:
     def _finish_step(self) -> None:
         cur = self._cur
         assert cur is not None
+        states = self._mail[(cur.step, "state")]
+        if len(states) >= cur.ids.size:
+            # A state arrived after the cell was computed from a robot that is no contact.
+            self._reject_strangers(states, set(cur.ids.tolist()))
         self.neighbours = tuple(n for n in cur.neighbours if n not in self.dead)
         two_hop = set(self.neighbours)
         for n in self.neighbours:
@@ -936,7 +1201,8 @@ class RobotFilter:
         two_hop.discard(self.robot_id)
         self.contacts = tuple(sorted(two_hop - self.dead))
         self.phase = Phase.DONE
-        self._drop_stale(cur.step + 1)
+        # The step's mail stays until the next step starts: it tells what a peer that
+        # still waits can miss (_held_from).
 
     # ----------------------------------------------------------------- helpers
     def _known_states(self) -> _Known:
@@ -1041,6 +1307,26 @@ class RobotFilter:
                      "(the robots' partitions disagree: a death or a missed neighbour)",
                      self.robot_id, n, what, step)
 
+    def _reject_strangers(self, states: dict[int, Message], known: set[int]) -> None:
+        """Declare dead the senders of ``states`` that are neither ``known`` nor dead.
+
+        A robot that sends its state counts this one as a contact; if this one does not
+        count it (the contact sets disagree, e.g. after one of the two declared the other
+        dead on lost messages), its state is left out and it is declared dead. It then
+        times this robot out in turn, and at the next step both admit each other again on
+        the same numbers (:meth:`observe_team`). Never happens while the sets agree.
+        """
+        strangers = set(states) - known - self.dead
+        if not strangers:
+            return
+        for src in strangers:
+            del states[src]
+        self.stats["strangers"] += len(strangers)
+        _log.warning("robot %d: %s sent states at step %d but are not its contacts (the "
+                     "contact sets disagree); declared dead", self.robot_id,
+                     sorted(strangers), self._last_step)
+        self._declare_dead(strangers)
+
     def _alive(self, ids: np.ndarray) -> np.ndarray:
         """Which of the robot ids ``ids`` (N,) are not declared dead, bool (N,)."""
         if not self.dead:
@@ -1132,6 +1418,59 @@ _ROUTES = {
     EtaPartialMsg: lambda m: (m.sender_id, (m.step, "partial", m.active_id)),
     EtaTotalMsg: lambda m: (m.active_id, (m.step, "total", m.active_id)),
 }
+
+
+def _sorted_team(ids: np.ndarray, positions: np.ndarray, power_weights: np.ndarray | None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Ids (N,), positions (N, 2) and power weights (N,) or None, by ascending id."""
+    ids = np.asarray(ids, dtype=np.int64)
+    order = np.argsort(ids, kind="stable")
+    ids, positions = ids[order], np.asarray(positions, dtype=float).reshape(-1, 2)[order]
+    rho = None if power_weights is None else np.asarray(power_weights, float)[order]
+    if len(np.unique(ids)) != len(ids):
+        raise ValueError(f"robot ids must be unique, got {ids.tolist()}")
+    return ids, positions, rho
+
+
+def _team_state(ids: np.ndarray, positions: np.ndarray, alive: np.ndarray | None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A team state by ascending id: ids (R,), positions (R, 2), alive flags (R,)."""
+    n = len(np.asarray(ids).reshape(-1))
+    alive = np.ones(n, dtype=bool) if alive is None else np.asarray(alive, dtype=bool)
+    positions = np.asarray(positions, dtype=float).reshape(-1, 2)
+    if alive.shape != (n,) or positions.shape != (n, 2):
+        raise ValueError(f"a team state needs one position and one alive flag per id: "
+                         f"{n} ids, positions {positions.shape}, alive {alive.shape}")
+    order = np.argsort(np.asarray(ids, dtype=np.int64).reshape(-1), kind="stable")
+    ids, positions, _ = _sorted_team(ids, positions, None)
+    return ids, positions, alive[order]
+
+
+def _may_miss(msg: Message, held: set[str]) -> bool:
+    """Whether a peer from which the kinds ``held`` arrived may still miss ``msg`` from us.
+
+    A robot sends the messages of a phase only once it holds those of the phase before
+    from all its contacts: its ownership transfer shows that it had every cell, its phantom
+    transfer every ownership transfer, and any message of the update (measurement set,
+    partial or total eta) every phantom transfer. In the update, its partial sums for our
+    measurements show that it had our measurement set, and its totals that it had our
+    partial sums.
+    """
+    kind = type(msg)
+    if kind is CellMsg:
+        return not held - {"cell"}
+    if kind is TransferMsg:
+        later = _AFTER_OWN if msg.kind == TransferKind.OWNERSHIP else _UPDATE
+        return not held & later
+    if kind is ScanMsg:
+        return "partial" not in held
+    if kind is EtaPartialMsg:
+        return "total" not in held
+    return True
+
+
+_UPDATE = frozenset({"scan", "partial", "total"})
+_AFTER_OWN = _UPDATE | {"phantom"}
 
 
 def _cell_radius(q: np.ndarray, cell: np.ndarray) -> float:
