@@ -97,8 +97,13 @@ def interrupt_once(robots: int, after: float, out: Path, domain: int) -> dict[st
         proc.wait(timeout=120.0)
         stop_s = time.monotonic() - start
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
+        if proc.poll() is None:  # run_swarm stops its children on SIGTERM
+            proc.terminate()
+            try:
+                proc.wait(timeout=30.0)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                subprocess.run(["pkill", "-9", "-f", str(run)], check=False)
     left = subprocess.run(["pgrep", "-f", str(run)], capture_output=True, text=True).stdout
     return {"robots": robots, "interrupted_after_s": after, "stop_s": round(stop_s, 2),
             "exit_code": proc.returncode, "processes_left": len(left.split())}

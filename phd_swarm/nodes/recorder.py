@@ -88,6 +88,11 @@ RECORDED = re.compile(r"^(?:/clock$|/world/|/monitor/|/robot_\d+/)")
 #: Graph poll period [s] (wall time).
 DISCOVER_PERIOD = 0.5
 
+#: At close, while step messages are missing: stop waiting for them after this many
+#: seconds without a new message [s], and after this many in all [s].
+SETTLE_QUIET = 1.0
+SETTLE_MAX = 10.0
+
 #: Reader depth for topics outside the table.
 DEFAULT_DEPTH = 100
 
@@ -398,8 +403,9 @@ class Recorder(Node):
         """Stop recording and finish the file (summary, footer); idempotent.
 
         Messages that reached a subscription but were not yet taken by the executor (the
-        last ones before Ctrl-C) are taken and written first, so a clean stop loses nothing
-        that DDS delivered.
+        last ones before Ctrl-C) are taken and written first, and while step messages are
+        missing the recorder waits a little for the rest (:meth:`_settle`), so a clean stop
+        loses nothing that the publishers wrote.
         """
         if self.log.closed:
             return
@@ -407,8 +413,7 @@ class Recorder(Node):
             self.destroy_timer(self._timer)
         drained = 0
         try:
-            for sub in self._subs.values():
-                drained += self._drain(sub)
+            drained = self._settle()
             self.report = self.check_completeness()
             if self.report is not None:
                 self.log.add_metadata("phd_swarm.completeness", {
@@ -431,6 +436,32 @@ class Recorder(Node):
         if self.report is not None:
             (logger.info if self.report.complete else logger.error)(
                 f"step messages {self.report.describe()}")
+
+    def _settle(self) -> int:
+        """Take what is waiting; while step messages are missing, wait for the rest.
+
+        The step topics are keep-all: what a live publisher wrote and this reader has not
+        got yet is still on its way (retransmitted until acknowledged), e.g. a robot's last
+        statuses while the recorder was busy with inbox traffic. So while the report has
+        gaps, keep taking until nothing new came for :data:`SETTLE_QUIET` s, at most
+        :data:`SETTLE_MAX` s. Returns how many messages were taken.
+        """
+        taken = sum(self._drain(sub) for sub in self._subs.values())
+        if not self._step_topics:
+            return taken
+        start = last = time.monotonic()
+        while time.monotonic() - start < SETTLE_MAX:
+            report = self.check_completeness()
+            if report is None or report.complete:
+                break
+            time.sleep(0.05)
+            got = sum(self._drain(sub) for sub in self._subs.values())
+            taken += got
+            if got:
+                last = time.monotonic()
+            elif time.monotonic() - last >= SETTLE_QUIET:
+                break
+        return taken
 
     @staticmethod
     def _drain(sub: Any) -> int:

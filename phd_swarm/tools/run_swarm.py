@@ -272,7 +272,10 @@ def run(opts: argparse.Namespace) -> int:
     started = time.monotonic()
     interrupted = False
     code = 0
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    # SIGINT explicitly too: a shell that starts a job in the background (nohup, `cmd &` in
+    # a script) makes it ignore SIGINT, and Python then installs no handler for it.
+    previous = {sig: signal.signal(sig, _raise_interrupt)
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         if record:
             swarm.start("recorder", "phd_swarm.nodes.recorder", common)
@@ -315,7 +318,8 @@ def run(opts: argparse.Namespace) -> int:
         print(f"run_swarm: {exc}", file=sys.stderr)
         code = 1
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         if interrupted or code == EXIT_NOT_READY:
             swarm.stop_all(STOP_GRACE)
         else:

@@ -202,7 +202,10 @@ def test_a_team_that_never_comes_up_fails_the_run_without_a_summary(tmp_path, ch
 @pytest.mark.ros
 @pytest.mark.slow
 def test_ctrl_c_stops_every_process_of_the_run(tmp_path, children):
-    proc = _start(children, tmp_path, "interrupted", "--duration", "600")
+    # Started as a shell's background job would be: with SIGINT ignored.
+    proc = children.start([RUN_SWARM, CONFIG, "--robots", str(ROBOTS), "--duration", "600",
+                           "--seed", "3", "--out", str(tmp_path), "--name", "interrupted"],
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     run = tmp_path / "interrupted"
     log = run / "logs" / "monitor.log"
     deadline = time.monotonic() + 120.0
