@@ -412,8 +412,10 @@ class Recorder(Node):
         if self._timer is not None:
             self.destroy_timer(self._timer)
         drained = 0
+        started = time.monotonic()
         try:
             drained = self._settle()
+            settled = time.monotonic() - started
             self.report = self.check_completeness()
             if self.report is not None:
                 self.log.add_metadata("phd_swarm.completeness", {
@@ -431,8 +433,9 @@ class Recorder(Node):
             write_bag_metadata(self.log.path)
         except (LogError, OSError) as exc:
             logger.warning(f"no metadata.yaml beside {self.log.path}: {exc}")
-        logger.info(f"wrote {self.log.message_count} messages ({drained} taken at close) on "
-                    f"{len(self._subs)} topics to {self.log.path}")
+        logger.info(f"wrote {self.log.message_count} messages ({drained} taken at close, "
+                    f"{settled:.1f} s) on {len(self._subs)} topics to {self.log.path} (closed "
+                    f"in {time.monotonic() - started:.1f} s)")
         if self.report is not None:
             (logger.info if self.report.complete else logger.error)(
                 f"step messages {self.report.describe()}")

@@ -167,6 +167,30 @@ def qos_profiles(text: str) -> list[dict[str, Any]]:
 
 
 # ------------------------------------------------------------------------ reading
+def _summary_statistics(path: Path) -> tuple[dict[str, tuple[str, int]], int, int | None,
+                                              int | None] | None:
+    """Counts and times from a finished log's summary, without reading its chunks.
+
+    Returns (topic -> (type, count), total, first and last log time [ns]) from the
+    ``Statistics`` record, or None if the log has none.
+    """
+    with open(path, "rb") as stream, contextlib.suppress(Exception):
+        summary = make_reader(stream).get_summary()
+        if summary is None or summary.statistics is None:
+            return None
+        st = summary.statistics
+        out: dict[str, tuple[str, int]] = {}
+        for cid in sorted(summary.channels):
+            channel = summary.channels[cid]
+            ros_type = summary.schemas[channel.schema_id].name
+            _, count = out.get(channel.topic, (ros_type, 0))
+            out[channel.topic] = (ros_type, count + st.channel_message_counts.get(cid, 0))
+        total = st.message_count
+        return out, total, (st.message_start_time if total else None), \
+            (st.message_end_time if total else None)
+    return None
+
+
 def _channel_metadata(path: Path, truncated: bool) -> dict[str, dict[str, str]]:
     """Topic -> metadata of its first channel, from the summary or, if none, a record scan."""
     with open(path, "rb") as stream:
@@ -213,12 +237,17 @@ def bag_metadata(mcap_path: str | Path) -> dict[str, Any]:
     path = Path(mcap_path)
     with LogReader(path) as log:
         truncated = log.truncated
-        info = log.info()
+        stats = None if truncated else _summary_statistics(path)
+        if stats is None:  # no statistics in the summary: count the messages
+            info = log.info()
+            stats = ({n: (t.ros_type, t.message_count) for n, t in info.topics.items()},
+                     info.message_count, info.start_ns, info.end_ns)
+    by_topic, total, first, last = stats
     metadata = _channel_metadata(path, truncated)
-    start = info.start_ns if info.start_ns is not None else 0
-    duration = (info.end_ns - info.start_ns) if info.start_ns is not None else 0
+    start = first if first is not None else 0
+    duration = (last - first) if first is not None else 0
     topics = []
-    for name, topic in info.topics.items():
+    for name, (ros_type, count) in sorted(by_topic.items()):
         channel = metadata.get(name, {})
         try:
             qos = qos_profiles(channel.get("offered_qos_profiles", ""))
@@ -227,19 +256,19 @@ def bag_metadata(mcap_path: str | Path) -> dict[str, Any]:
         topics.append({
             "topic_metadata": {
                 "name": name,
-                "type": topic.ros_type,
+                "type": ros_type,
                 "serialization_format": SERIALIZATION_FORMAT,
                 "offered_qos_profiles": qos,
                 "type_description_hash": channel.get("topic_type_hash", ""),
             },
-            "message_count": topic.message_count,
+            "message_count": count,
         })
     return {
         "version": VERSION,
         "storage_identifier": STORAGE_IDENTIFIER,
         "duration": {"nanoseconds": duration},
         "starting_time": {"nanoseconds_since_epoch": start},
-        "message_count": info.message_count,
+        "message_count": total,
         "topics_with_message_count": topics,
         "compression_format": "",
         "compression_mode": "",
@@ -248,7 +277,7 @@ def bag_metadata(mcap_path: str | Path) -> dict[str, Any]:
             "path": path.name,
             "starting_time": {"nanoseconds_since_epoch": start},
             "duration": {"nanoseconds": duration},
-            "message_count": info.message_count,
+            "message_count": total,
         }],
         "custom_data": None,
         "ros_distro": ROS_DISTRO,

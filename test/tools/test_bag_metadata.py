@@ -288,3 +288,12 @@ def test_python_dash_m_entry_point(tmp_path):
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 1
     assert f"{missing}: no such file" in proc.stderr and proc.stdout == ""
+
+
+def test_a_finished_log_is_described_from_its_summary_as_a_scan_would(tmp_path, monkeypatch):
+    path = tmp_path / "run.mcap"
+    _write_log(path, steps=6)
+    from_summary = bm.bag_metadata(path)
+    assert from_summary["message_count"] == 6 * len(_messages(0))
+    monkeypatch.setattr(bm, "_summary_statistics", lambda p: None)
+    assert bm.bag_metadata(path) == from_summary
