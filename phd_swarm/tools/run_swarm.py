@@ -43,6 +43,7 @@ from phd_swarm.nodes.param_specs import ROBOT
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.testing import clean_fastdds_shm, stop_process_group
+from phd_swarm.tools.bag_metadata import write_bag_metadata
 from phd_swarm.tools.mcap_log import LogError, read_metadata
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
@@ -334,11 +335,22 @@ def run(opts: argparse.Namespace) -> int:
             except subprocess.TimeoutExpired:
                 server.kill()
     wall = time.monotonic() - started
+    _ensure_bag_metadata(run_dir / "run.mcap")
     if code == EXIT_NOT_READY:
         print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",
               file=sys.stderr)
         return code
     return _report(run_dir, rc, wall, interrupted, swarm.cpu) or code
+
+
+def _ensure_bag_metadata(mcap: Path) -> None:
+    """Write rosbag2's metadata.yaml beside ``mcap`` if the recorder could not (killed)."""
+    if not mcap.exists() or (mcap.parent / "metadata.yaml").exists():
+        return
+    try:
+        write_bag_metadata(mcap)
+    except (LogError, OSError) as exc:
+        print(f"run_swarm: no metadata.yaml for {mcap}: {exc}", file=sys.stderr)
 
 
 def _explain_start_failure(swarm: Swarm, run_dir: Path) -> None:

@@ -227,6 +227,7 @@ def test_ctrl_c_stops_every_process_of_the_run(tmp_path, children):
     assert 0 < summary["steps"] < 1200 and not summary["complete"]
     info = summarize(run / "run.mcap")
     assert not info.truncated, "the recorder closed the log on Ctrl-C"
+    assert (run / "metadata.yaml").exists()
     print(f"run_swarm stopped {stopped:.1f} s after Ctrl-C")
 
 
