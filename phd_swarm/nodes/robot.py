@@ -18,9 +18,13 @@ A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds
 new protocol message arrived during a period while the step waits, one round passes
 (:meth:`RobotFilter.tick`), and the robot re-sends its state to its contacts as a
 keep-alive; after ``timeout_ticks`` rounds the awaited peers not heard from in that time
-are declared dead (keep-alives count as heard, not as new). On every period of a step the
-robot also publishes a ``WORKING`` status: the world's liveness signal, so a robot that
-waits on a dead peer is not itself taken for dead.
+are declared dead (keep-alives count as heard, not as new).
+
+Liveness is apart from progress: a thread of the node's own publishes a ``WORKING`` status
+once per ``tick_period`` while a step is in progress, so a robot that waits on a dead peer,
+or whose executor works through a backlog of messages on a loaded machine, is not taken
+for dead by the world; it stops when the executor has run no callback for
+:data:`HUNG_AFTER` s (or 3 x ``timeout_ticks`` periods, if longer).
 
 Membership comes from the world's team state (``/world/robots``: ids, positions, alive
 flags), which the robot reads every step: step k starts when both the measurement set and
@@ -47,6 +51,7 @@ start when another node already publishes this robot id's status (a duplicate ro
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from collections import defaultdict, deque
 
@@ -94,6 +99,9 @@ _KIND = {StateMsg: "state", CellMsg: "cell", ScanMsg: "measurements",
          EtaPartialMsg: "eta_partial", EtaTotalMsg: "eta_total", TransferMsg: "particles"}
 _ROS_TYPE = {"state": RobotState, "cell": CellPolygon, "measurements": MeasurementSet,
              "eta_partial": EtaPartial, "eta_total": EtaTotal, "particles": ParticleTransfer}
+
+#: Wall seconds without any executor callback after which a robot stops saying it is alive.
+HUNG_AFTER = 30.0
 
 #: Log the first few rejections of each reason, then every this many.
 _LOG_EVERY = 100
@@ -184,11 +192,21 @@ class RobotNode(Node):
                                  subscription_qos("STEP"))
         self.create_timer(self.params["tick_period"], self._on_timer,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
+        #: Liveness (:meth:`_heartbeat`): when the executor last ran a callback, and how
+        #: long without one counts as hung.
+        self._alive_at = time.monotonic()
+        self._hung_after = max(HUNG_AFTER, 3 * self.params["timeout_ticks"]
+                               * self.params["tick_period"])
+        self._beat_stop = threading.Event()
+        self._beat = threading.Thread(target=self._heartbeat, name=f"heartbeat_{rid}",
+                                      daemon=True)
+        self._beat.start()
         self.get_logger().info(f"robot {rid}: {self.controller.kind} controller, "
                                f"{self.scenario.name}, {self.scenario.robots} robots")
 
     # ------------------------------------------------------------------ start-up
     def _on_team(self, msg: TeamState) -> None:
+        self._alive_at = time.monotonic()
         ids = np.array(msg.robot_ids, dtype=np.int64)
         try:
             pos = convert.xy(msg.positions, "positions")
@@ -259,6 +277,7 @@ class RobotNode(Node):
 
     # -------------------------------------------------------------------- steps
     def _on_scan(self, msg: MeasurementSet) -> None:
+        self._alive_at = time.monotonic()
         try:
             scan = convert.scan_from_ros(msg, self.params["max_measurements"])
             if scan.robot_id != self.robot_id:
@@ -321,6 +340,7 @@ class RobotNode(Node):
         return callback
 
     def _on_inbox(self, kind: str, ros_msg) -> None:
+        self._alive_at = time.monotonic()
         try:
             msg = convert.from_ros(ros_msg, self.grid, self.params["max_measurements"])
             self._check_welcome(msg)
@@ -356,29 +376,55 @@ class RobotNode(Node):
                                          f"{self.filter.step}, steps {self.scenario.steps})")
 
     def _on_timer(self) -> None:
+        self._alive_at = time.monotonic()
         if not self.ready:
             self._check_ready()
             return
         self._release_held()
         if self.evicted:
-            # Still here: the world lets a robot it hears from rejoin at its next step.
-            self._publish_working(self.join_after)
             return
         if self.filter.done:
             self._heard = False
             return
-        # Liveness apart from progress: the world waits for a robot it hears from.
-        self._publish_working(self.filter.step)
         if self._heard:
             self._heard = False
             return
         self._send(self.filter.tick())
         self._after_progress()
 
-    def _publish_working(self, step: int) -> None:
-        self.status_pub.publish(RobotStatus(
-            header=convert.header(max(step, 0), self.dt, self.frame_id),
-            state=RobotStatus.STATE_WORKING, robot_id=self.robot_id, step=max(step, 0)))
+    def _heartbeat(self) -> None:
+        """Liveness apart from progress, on a thread of its own (see the module docstring).
+
+        Once per ``tick_period``, while a step is in progress (or the robot waits to
+        rejoin), publish a ``WORKING`` status, as long as the executor ran a callback in the
+        last :attr:`_hung_after` s: a robot whose executor is busy (a backlog of messages
+        on a loaded machine, a wait on a dead peer) is alive; one whose executor hangs is
+        not, and the world will count it dead.
+        """
+        period = self.params["tick_period"]
+        while not self._beat_stop.wait(period):
+            if not self.ready or time.monotonic() - self._alive_at > self._hung_after:
+                continue
+            if self.evicted:
+                step = self.join_after  # still here: the world lets it rejoin
+            elif not self.filter.done:
+                step = self.filter.step
+            else:
+                continue
+            try:
+                self.status_pub.publish(RobotStatus(
+                    header=convert.header(max(step, 0), self.dt, self.frame_id),
+                    state=RobotStatus.STATE_WORKING, robot_id=self.robot_id,
+                    step=max(step, 0)))
+            except Exception:  # noqa: BLE001 - the node or context is going away
+                return
+
+    def destroy_node(self) -> None:
+        """Stop the heartbeat thread, then destroy the node."""
+        self._beat_stop.set()
+        if self._beat.is_alive():
+            self._beat.join(timeout=2.0)
+        super().destroy_node()
 
     def _after_progress(self) -> None:
         if self.evicted:
