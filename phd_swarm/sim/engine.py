@@ -364,6 +364,14 @@ class InMemoryEngine:
             np.add.at(counts, self.robots[rid].bins, 1)
         return counts
 
+    def counters(self) -> dict[str, int]:
+        """The robots' protocol counters (:attr:`RobotFilter.stats`), summed over the team."""
+        total: dict[str, int] = {}
+        for robot in self.robots.values():
+            for key, value in robot.stats.items():
+                total[key] = total.get(key, 0) + value
+        return total
+
     def messages_per_robot(self, step: int = -1) -> dict[int, int]:
         """Messages received by each live robot in a step."""
         t = self.traffic[step]

@@ -151,7 +151,7 @@ def run_trial(scenario: sc.Scenario, faults: LinkFaults | None, timeout_ticks: i
         if reference is not None:
             w0 = reference[k]
             l1[k] = float(np.abs(image - w0).sum() / w0.sum())
-    stats = _counters(engine)
+    stats = engine.counters()
     row = {"ospa_mean_last_half": float(ospa[scenario.steps // 2:].mean()),
            "l1_mean": float(l1.mean()), "l1_max": float(l1.max()),
            "false_deaths": stats.get("declared_dead", 0) + stats.get("strangers", 0),
@@ -165,14 +165,6 @@ def run_trial(scenario: sc.Scenario, faults: LinkFaults | None, timeout_ticks: i
            "wall_s": time.perf_counter() - wall0}
     return row, images
 
-
-def _counters(engine: InMemoryEngine) -> dict[str, int]:
-    """The robots' protocol counters, summed."""
-    total: dict[str, int] = {}
-    for robot in engine.robots.values():
-        for key, value in robot.stats.items():
-            total[key] = total.get(key, 0) + value
-    return total
 
 
 def run_study(scenarios: Sequence[str], robots: int, steps: int, seeds: int,

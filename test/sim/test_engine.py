@@ -28,13 +28,6 @@ def _run_and_compare(engine: InMemoryEngine, steps: int) -> float:
     return worst
 
 
-def _stats(engine: InMemoryEngine) -> dict[str, int]:
-    total: dict[str, int] = {}
-    for robot in engine.robots.values():
-        for key, value in robot.stats.items():
-            total[key] = total.get(key, 0) + value
-    return total
-
 
 CASES = {
     "dames_static": (sc.dames_static(robots=20, targets=30), "phd", None),
@@ -51,7 +44,7 @@ def test_distributed_filter_equals_centralised_filter(name):
     engine = InMemoryEngine(scenario.with_overrides(seed=3), controller,
                             delivery_seed=shuffle, reference=True)
     _run_and_compare(engine, STEPS)
-    assert _stats(engine) == {}, "no orphans, timeouts, mismatches or uncovered bins"
+    assert engine.counters() == {}, "no orphans, timeouts, mismatches or uncovered bins"
     # Many overlapping fields of view really happened: eta sums crossed robots.
     kinds = set()
     for t in engine.traffic:
@@ -102,7 +95,7 @@ def test_a_killed_robot_does_not_stall_the_team(caplog):
     assert victim not in live and len(live) == 11
     counts = engine.ownership_counts()
     assert counts.min() == 1 and counts.max() == 1, "survivors own every bin exactly once"
-    stats = _stats(engine)
+    stats = engine.counters()
     assert stats.get("orphan_bins", 0) >= 1
     noticed = [r for r in live if victim in engine.robots[r].dead]
     assert noticed, "the robots that waited for it declared it dead"
@@ -124,7 +117,7 @@ def test_a_robot_dying_between_its_state_and_its_cell_does_not_break_the_hand_ov
     _step_killing_at_first(monkeypatch, engine, 8, "CellPolygon")
     engine.run(3)
     assert 8 in engine.killed and engine.step_index == 34
-    assert _stats(engine).get("lost_to_dead", 0) > 0
+    assert engine.counters().get("lost_to_dead", 0) > 0
 
 
 def _step_killing_at_first(monkeypatch, engine: InMemoryEngine, victim: int,
@@ -216,14 +209,14 @@ def test_a_missed_neighbour_costs_counted_bins_for_a_step_not_the_run():
         robot = engine.robots[x]
         robot.contacts = tuple(c for c in robot.contacts if c != y)
     engine.step()
-    stats = _stats(engine)
+    stats = engine.counters()
     assert stats.get("cell_mismatch", 0) >= 1
     assert stats.get("orphan_bins", 0) + stats.get("misrouted_bins", 0) > 0
     assert b in engine.robots[a].contacts and a in engine.robots[b].contacts
     assert engine.ownership_counts().max() == 2, "both held the disputed bins"
     engine.run(3)
     # The disputed bins arrived twice at their owner, who kept its own copy.
-    assert _stats(engine).get("duplicate_bins", 0) > 0
+    assert engine.counters().get("duplicate_bins", 0) > 0
     counts = engine.ownership_counts()
     assert counts.min() == 1 and counts.max() == 1
     assert np.all(np.isfinite(engine.team_weights()))

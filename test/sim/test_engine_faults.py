@@ -14,13 +14,6 @@ from phd_swarm.sim.engine import InMemoryEngine
 pytestmark = pytest.mark.slow
 
 
-def _stats(engine: InMemoryEngine) -> dict[str, int]:
-    total: dict[str, int] = {}
-    for robot in engine.robots.values():
-        for key, value in robot.stats.items():
-            total[key] = total.get(key, 0) + value
-    return total
-
 
 def _traffic(engine: InMemoryEngine) -> list:
     return [(dict(t.messages), dict(t.bytes), t.lost, t.dropped, t.delayed)
@@ -40,7 +33,7 @@ def test_links_without_faults_change_nothing():
     assert np.array_equal(plain.team_weights(), off.team_weights())
     assert np.array_equal(plain.world.robot_positions, off.world.robot_positions)
     assert _traffic(plain) == _traffic(off), "the same messages, step by step"
-    assert _stats(off) == {}
+    assert off.counters() == {}
 
 
 @pytest.mark.parametrize("faults", [LinkFaults(drop=0.01, seed=1), LinkFaults(drop=0.05, seed=2),
@@ -57,7 +50,7 @@ def test_the_team_keeps_stepping_over_lossy_links(faults):
     assert np.all(np.isfinite(engine.team_weights()))
     lossy = sum(t.dropped for t in engine.traffic) + sum(t.delayed for t in engine.traffic)
     assert lossy > 100
-    assert _stats(engine)["resent"] > 0
+    assert engine.counters()["resent"] > 0
 
 
 @pytest.mark.parametrize("drop", [0.01, 0.05])
@@ -69,7 +62,7 @@ def test_lost_messages_are_recovered_without_declaring_live_robots_dead(drop):
     engine = InMemoryEngine(scenario, "phd", faults=LinkFaults(drop=drop, seed=7))
     engine.run(60)
     assert all(not r.dead for r in engine.robots.values())
-    stats = _stats(engine)
+    stats = engine.counters()
     assert stats.get("timeouts", 0) == 0 and stats.get("orphan_bins", 0) == 0
     dropped = sum(t.dropped for t in engine.traffic)
     assert dropped > 100 * drop / 0.01
@@ -87,7 +80,7 @@ def test_delays_and_a_shuffled_delivery_give_the_loss_free_result():
     engine.run(30)
     reference = InMemoryEngine(scenario, "phd")
     reference.run(30)
-    assert _stats(engine).get("timeouts", 0) == 0
+    assert engine.counters().get("timeouts", 0) == 0
     assert sum(t.delayed for t in engine.traffic) > 100
     assert np.array_equal(engine.team_weights(), reference.team_weights())
 
@@ -98,7 +91,7 @@ def test_a_lossy_run_is_reproducible_from_its_seeds():
         engine = InMemoryEngine(_static(seed=1), "phd", delivery_seed=3,
                                 faults=LinkFaults(drop=0.1, delay=0.05, seed=8))
         engine.run(20)
-        runs.append((engine.team_weights(), _traffic(engine), _stats(engine)))
+        runs.append((engine.team_weights(), _traffic(engine), engine.counters()))
     assert np.array_equal(runs[0][0], runs[1][0])
     assert runs[0][1] == runs[1][1] and runs[0][2] == runs[1][2]
     other = InMemoryEngine(_static(seed=1), "phd", delivery_seed=3,
@@ -122,7 +115,7 @@ def test_every_message_delivered_twice_is_applied_once(monkeypatch):
     engine.run(15)
     kinds = {k for t in engine.traffic for c in t.messages.values() for k in c}
     assert "PhantomTransfer" in kinds and "EtaTotal" in kinds
-    assert _stats(engine)["duplicates"] > 0
+    assert engine.counters()["duplicates"] > 0
     assert np.array_equal(engine.team_weights(), reference.team_weights())
 
 
@@ -160,7 +153,7 @@ def test_a_dead_robot_rejoins_and_gets_its_bins_back(restart):
     counts = engine.ownership_counts()
     assert counts.min() == 1 and counts.max() == 1
     assert all(not engine.robots[r].dead for r in live), "nobody else declared dead"
-    stats = _stats(engine)
+    stats = engine.counters()
     assert stats["rejoins"] == 1 and stats["revived_peers"] == 11
     assert stats["world_dead"] == 11 and stats.get("timeouts", 0) == 0
     assert all(victim in engine.robots[c].contacts for c in robot.contacts)
@@ -194,12 +187,12 @@ def test_the_rejoin_hand_over_conserves_mass(restart):
         engine.kill(v)
     engine.run(10)
     total = engine.team_weights().sum()
-    orphans = _stats(engine).get("orphan_bins", 0)
+    orphans = engine.counters().get("orphan_bins", 0)
     assert orphans > 0, "the deaths orphaned the victims' bins"
     for v in victims:
         engine.revive(v, restart=restart)
     engine.step()
-    assert _stats(engine).get("orphan_bins", 0) == orphans, "the rejoin orphaned nothing"
+    assert engine.counters().get("orphan_bins", 0) == orphans, "the rejoin orphaned nothing"
     assert engine.team_weights().sum() == pytest.approx(total, rel=1e-12)
     assert all(engine.robots[v].bins.size > 0 for v in victims)
     engine.run(19)
@@ -213,7 +206,7 @@ def test_robots_taken_for_dead_on_lost_messages_are_admitted_again():
     # so the next step admits them again: nobody stays dead, every bin has one owner.
     engine = InMemoryEngine(_static(seed=1), "phd", faults=LinkFaults(drop=0.2, seed=1))
     engine.run(30)
-    stats = _stats(engine)
+    stats = engine.counters()
     assert stats["timeouts"] > 0 and stats["revived_peers"] > 0
     engine.faults = None
     engine.links = None

@@ -297,36 +297,28 @@ def _start_long(children, config: Path, out: Path, name: str):
 
 @pytest.mark.ros
 @pytest.mark.slow
-def test_a_restarted_robot_process_rejoins_the_team(tmp_path, children):
-    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, "restart")
-    run = tmp_path / "restart"
+@pytest.mark.parametrize("how", ["restarted", "slow"])
+def test_a_robot_counted_dead_rejoins_the_team(tmp_path, children, how):
+    """A robot counted dead is back at a following step.
+
+    Robot 2's process is killed and started again (run_robot.sh), or only stopped for
+    longer than the world's deadline.
+    """
+    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, how)
+    run = tmp_path / how
     _wait_for(run / "logs" / "monitor.log", "step 11/", proc)
     pid = _pid_of(run, 2)
     assert pid is not None
-    os.kill(pid, signal.SIGKILL)
-    _wait_for(run / "logs" / "world.log", "robot 2 did not report", proc)
-    again = children.start([str(ROOT / "scripts" / "run_robot.sh"), "2",
-                            str(run / "config.yaml")])
-    step = _rejoin_and_stop(run, 2, proc)
-    children.stop(again)
-    _assert_rejoined(run, 2, step)
-
-
-@pytest.mark.ros
-@pytest.mark.slow
-def test_a_robot_that_was_only_slow_rejoins_the_team(tmp_path, children):
-    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, "slow")
-    run = tmp_path / "slow"
-    _wait_for(run / "logs" / "monitor.log", "step 11/", proc)
-    pid = _pid_of(run, 1)
-    assert pid is not None
-    os.kill(pid, signal.SIGSTOP)
+    os.kill(pid, signal.SIGKILL if how == "restarted" else signal.SIGSTOP)
     try:
-        _wait_for(run / "logs" / "world.log", "robot 1 did not report", proc)
+        _wait_for(run / "logs" / "world.log", "robot 2 did not report", proc)
     finally:
-        os.kill(pid, signal.SIGCONT)
-    step = _rejoin_and_stop(run, 1, proc)
-    _assert_rejoined(run, 1, step)
+        if how == "slow":
+            os.kill(pid, signal.SIGCONT)
+    if how == "restarted":
+        children.start([str(ROOT / "scripts" / "run_robot.sh"), "2", str(run / "config.yaml")])
+    step = _rejoin_and_stop(run, 2, proc)
+    _assert_rejoined(run, 2, step)
 
 
 @pytest.mark.ros
