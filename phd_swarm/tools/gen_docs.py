@@ -59,7 +59,9 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("goal"): "Goal chosen by the controller for the next move "
                                   "(Dames eq. 8, Chen eq. 3).",
     ROBOT_PATTERN.format("status"): "READY at start-up, then STEP_DONE with goal, power "
-                                    "weight and counters: the world's lockstep hand-shake.",
+                                    "weight and counters: the world's lockstep hand-shake; "
+                                    "WORKING once per tick_period while a step lasts "
+                                    "(liveness).",
     ROBOT_PATTERN.format("cell"): "The robot's own cell (Voronoi or power diagram clipped to "
                                   "E) and neighbour ids, for observers.",
     ROBOT_PATTERN.format("density"): "The robot's PHD over a window of the grid (parameter "
