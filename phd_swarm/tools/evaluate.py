@@ -201,6 +201,7 @@ def main(argv: list[str] | None = None) -> int:
               f"over the second half {summary['ospa_mean_last_half']:.3f} m, targets "
               f"{summary['cardinality_est_final']} estimated / "
               f"{summary['cardinality_true_final']} true")
+        print(f"log: {report.describe()}")
         if agree["steps_compared"]:
             print(f"live monitor: {agree['steps_compared']} steps compared, largest OSPA "
                   f"difference {agree['max_abs_ospa_difference']:.3g} m")

@@ -24,13 +24,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from rclpy.serialization import deserialize_message
 
 from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.recorder import status_state
 from phd_swarm.tools.mcap_log import LogError, open_log
-from phd_swarm.tools.run_log import config_from_log
+from phd_swarm.tools.run_log import config_from_log, deserialize
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
 #: Prefix of the warning evaluate and replay print for a log with gaps.
@@ -58,7 +58,7 @@ def check_log(path: str | Path, config: RunConfig | None = None
         team: dict[int, np.ndarray] = {}
         for rec in log.messages(wanted, decode=False):
             if rec.topic == T.WORLD_ROBOTS:
-                msg = deserialize_message(rec.data, TeamState)
+                msg = deserialize(rec, TeamState, path)
                 ids = np.asarray(msg.robot_ids, dtype=np.int64)
                 ok = ids < s.robots
                 flags = np.zeros(s.robots, dtype=bool)
@@ -66,9 +66,10 @@ def check_log(path: str | Path, config: RunConfig | None = None
                 team[int(msg.step)] = flags
                 steps[rec.topic].add(int(msg.step))
             elif rec.topic.endswith("/status"):
-                status = deserialize_message(rec.data, RobotStatus)
-                if status.state == RobotStatus.STATE_STEP_DONE:
-                    steps[rec.topic].add(int(status.step))
+                # The state from the bytes (not the whole message: logs of older versions
+                # of RobotStatus are checked all the same); a report's stamp is its step.
+                if status_state(rec.data) == RobotStatus.STATE_STEP_DONE:
+                    steps[rec.topic].add(completeness.step_of(rec.publish_time_ns, s.dt))
             else:
                 steps[rec.topic].add(completeness.step_of(rec.publish_time_ns, s.dt))
     return completeness.check(steps, team, s.robots, wanted)

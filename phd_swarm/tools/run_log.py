@@ -27,17 +27,18 @@ from collections import defaultdict
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
 from phd_swarm.core.cumulative import cumulative_weight
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.sim.scenario import Scenario
-from phd_swarm.tools.mcap_log import LogError, open_log
+from phd_swarm.tools.mcap_log import LogError, LogRecord, open_log
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
@@ -153,7 +154,7 @@ class RunLog:
 
         with open_log(self.path) as log:
             for rec in log.messages(topics, decode=False):
-                msg = deserialize_message(rec.data, DensityGrid)
+                msg = deserialize(rec, DensityGrid, self.path)
                 k = int(msg.step)
                 if k not in self.steps or k in done or (wanted is not None and k not in wanted):
                     continue
@@ -216,6 +217,23 @@ def config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfi
         raise LogError(f"{path}: the recorded configuration is not valid: {exc}") from None
 
 
+def deserialize(rec: LogRecord, cls: type, path: Path) -> Any:
+    """``rec``'s CDR bytes as an installed message of class ``cls`` (rclpy's C type support).
+
+    Raises
+    ------
+    LogError
+        Naming the topic and type, when the bytes do not fit the installed definition (a
+        log recorded with another version of the message, e.g. before a field was added).
+    """
+    try:
+        return _rclpy_deserialize(rec.data, cls)
+    except Exception as exc:  # rclpy raises RMWError (not exported) for a bad buffer
+        raise LogError(f"{path}: a {rec.ros_type} message on {rec.topic} does not fit the "
+                       f"installed definition of that type (a log recorded by another "
+                       f"version of phd_swarm?): {exc}") from None
+
+
 def _xy(points, what: str, path: Path, k: int) -> np.ndarray:
     try:
         return convert.xy(points, what)
@@ -261,13 +279,13 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
                    for kind in ("status", "cell", "measurements")]
         for rec in log.messages(topics, decode=False):
             if rec.topic == T.WORLD_TRUTH:
-                m = deserialize_message(rec.data, TargetSet)
+                m = deserialize(rec, TargetSet, path)
                 r = at(int(m.step))
                 r.truth = _xy(m.positions, "truth positions", path, m.step)
                 r.truth_ids = np.asarray(m.ids, dtype=np.int64)
                 truth_seen.add(int(m.step))
             elif rec.topic == T.WORLD_ROBOTS:
-                m = deserialize_message(rec.data, TeamState)
+                m = deserialize(rec, TeamState, path)
                 r = at(int(m.step))
                 pos = _xy(m.positions, "robot positions", path, m.step)
                 r.robots = {int(i): pos[j] for j, i in enumerate(m.robot_ids)}
@@ -275,7 +293,7 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
                                     if a)
                 team_seen.add(int(m.step))
             elif rec.topic == T.MONITOR_METRICS:
-                m = deserialize_message(rec.data, TeamMetrics)
+                m = deserialize(rec, TeamMetrics, path)
                 at(int(m.step)).monitor = {
                     "ospa": m.ospa, "ospa_localisation": m.ospa_localisation,
                     "ospa_cardinality": m.ospa_cardinality,
@@ -288,16 +306,16 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
                     continue
                 kind = match.group(2)
                 if kind == "status":
-                    m = deserialize_message(rec.data, RobotStatus)
+                    m = deserialize(rec, RobotStatus, path)
                     if m.state == RobotStatus.STATE_STEP_DONE and np.isfinite(m.goal.x) \
                             and np.isfinite(m.goal.y):
                         at(int(m.step)).goals[int(m.robot_id)] = np.array([m.goal.x, m.goal.y])
                 elif kind == "cell":
-                    m = deserialize_message(rec.data, CellPolygon)
+                    m = deserialize(rec, CellPolygon, path)
                     cells[int(m.robot_id)].append(
                         (int(m.step), _xy(m.vertices, "cell vertices", path, m.step)))
                 else:
-                    m = deserialize_message(rec.data, MeasurementSet)
+                    m = deserialize(rec, MeasurementSet, path)
                     sensor = np.array([m.sensor_position.x, m.sensor_position.y])
                     at(int(m.step)).scans[int(m.robot_id)] = (
                         sensor, _xy(m.measurements, "measurements", path, m.step))

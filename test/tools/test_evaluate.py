@@ -78,6 +78,7 @@ def test_evaluation_reproduces_the_monitor_and_draws_the_run(recorded_run, tmp_p
                     "--every", "8")
     assert res.returncode == 0, res.stderr
     assert "largest OSPA difference 0 m" in res.stdout
+    assert "log: complete: " in res.stdout
 
     monitor = json.loads((recorded_run / "summary.json").read_text())
     ev = json.loads((out / "evaluation.json").read_text())
@@ -243,3 +244,27 @@ def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp
     res = _evaluate(str(chen_run / "run.mcap"), "--out", str(tmp_path / "eval"))
     assert res.returncode == 0, res.stderr
     assert _is_png(tmp_path / "eval" / "snapshot_5.5s.png")
+
+
+def test_a_message_of_another_definition_is_a_clear_error(recorded_run, tmp_path):
+    """A message that does not fit the installed definition is refused, naming the topic.
+
+    Here robot 1's statuses are cut short, as an older, shorter RobotStatus would be; the
+    log's completeness still reads.
+    """
+    src, dst = recorded_run / "run.mcap", tmp_path / "old.mcap"
+    with open_log(src) as log:
+        meta = log.metadata()
+        with LogWriter(dst) as out:
+            for name, data in meta.items():
+                out.add_metadata(name, data)
+            for rec in log.messages(decode=False):
+                out.add_channel(rec.topic, rec.ros_type)
+                data = rec.data[:40] if rec.topic == "/robot_1/status" else rec.data
+                out.write(rec.topic, data, rec.log_time_ns, rec.publish_time_ns)
+    res = _evaluate(str(dst), "--no-plots", "--out", str(tmp_path / "eval"))
+    assert res.returncode == 1 and "Traceback" not in res.stderr
+    assert "RobotStatus message on /robot_1/status does not fit the installed" in res.stderr
+    check = subprocess.run([sys.executable, "-m", "phd_swarm.tools.log_check", str(dst)],
+                           capture_output=True, text=True, timeout=120)
+    assert check.returncode == 0 and "complete: " in check.stdout
