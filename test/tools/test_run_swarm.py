@@ -111,27 +111,15 @@ def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, c
 
 
 def _pid_of(run_dir: Path, robot_id: int) -> int | None:
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            cmd = (entry / "cmdline").read_bytes().split(b"\0")
-        except OSError:
-            continue
-        args = [a.decode(errors="replace") for a in cmd]
-        if f"robot_id:={robot_id}" in args and any(str(run_dir) in a for a in args):
-            return int(entry.name)
-    return None
+    """PID of the process of robot ``robot_id`` in the run at ``run_dir``, if any."""
+    pids = _pids(run_dir, f"robot_id:={robot_id}")
+    return pids[0] if pids else None
 
 
 @pytest.mark.ros
 @pytest.mark.slow
 def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, children):
-    config = tmp_path / "fast_timeouts.yaml"
-    config.write_text(Path(CONFIG).read_text().replace(
-        "    step_timeout: 15.0", "    step_timeout: 3.0").replace(
-        "    controller: phd", "    controller: phd\n    tick_period: 0.2\n"
-        "    timeout_ticks: 5").replace("progress_every: 20", "progress_every: 2"))
+    config = _fast_timeouts(tmp_path)
     steps = 40
     proc = children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
                            str(steps * 0.5), "--seed", "5", "--out", str(tmp_path), "--name",
@@ -155,8 +143,8 @@ def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, chi
     assert metrics[-1].step == steps - 1
 
 
-def _pids(run_dir: Path, module: str) -> list[int]:
-    """PIDs of this run's processes running ``python -m module``."""
+def _pids(run_dir: Path, arg: str) -> list[int]:
+    """PIDs of this run's processes with the argument ``arg`` (a module, ``robot_id:=2``)."""
     out = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -166,7 +154,7 @@ def _pids(run_dir: Path, module: str) -> list[int]:
                     for a in (entry / "cmdline").read_bytes().split(b"\0")]
         except OSError:
             continue
-        if module in args and any(str(run_dir) in a for a in args):
+        if arg in args and any(str(run_dir) in a for a in args):
             out.append(int(entry.name))
     return out
 
