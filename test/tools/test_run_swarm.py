@@ -119,11 +119,8 @@ def _pid_of(run_dir: Path, robot_id: int) -> int | None:
 @pytest.mark.ros
 @pytest.mark.slow
 def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, children):
-    config = _fast_timeouts(tmp_path)
     steps = 40
-    proc = children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
-                           str(steps * 0.5), "--seed", "5", "--out", str(tmp_path), "--name",
-                           "kill"])
+    proc = _start_fast(children, tmp_path, "kill", steps)
     run = tmp_path / "kill"
     log = run / "logs" / "monitor.log"
     deadline = time.monotonic() + 120.0
@@ -278,9 +275,11 @@ def _assert_rejoined(run: Path, robot: int, step: int) -> None:
     assert max(revived) >= 1, "the others admitted it again"
 
 
-def _start_long(children, config: Path, out: Path, name: str):
-    return children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
-                           "1000", "--seed", "5", "--out", str(out), "--name", name])
+def _start_fast(children, out: Path, name: str, steps: int, *extra: str):
+    """run_swarm.sh with :func:`_fast_timeouts`, ROBOTS robots, seed 5, into ``out/name``."""
+    return children.start([RUN_SWARM, str(_fast_timeouts(out)), "--robots", str(ROBOTS),
+                           "--duration", str(steps * 0.5), "--seed", "5", "--out", str(out),
+                           "--name", name, *extra])
 
 
 @pytest.mark.ros
@@ -292,7 +291,7 @@ def test_a_robot_counted_dead_rejoins_the_team(tmp_path, children, how):
     Robot 2's process is killed and started again (run_robot.sh), or only stopped for
     longer than the world's deadline.
     """
-    proc = _start_long(children, _fast_timeouts(tmp_path), tmp_path, how)
+    proc = _start_fast(children, tmp_path, how, 2000)
     run = tmp_path / how
     _wait_for(run / "logs" / "monitor.log", "step 11/", proc)
     pid = _pid_of(run, 2)
@@ -313,12 +312,9 @@ def test_a_robot_counted_dead_rejoins_the_team(tmp_path, children, how):
 @pytest.mark.slow
 def test_the_team_steps_through_lossy_links(tmp_path, children):
     """5 % of the protocol messages lost and 5 % held back: nobody is taken for dead."""
-    config = _fast_timeouts(tmp_path)
     steps = 40
-    proc = children.start([RUN_SWARM, str(config), "--robots", str(ROBOTS), "--duration",
-                           str(steps * 0.5), "--seed", "5", "--out", str(tmp_path), "--name",
-                           "lossy", "--drop", "0.05", "--delay", "0.05", "--delay-rounds", "2",
-                           "--fault-seed", "3", "--quiet"])
+    proc = _start_fast(children, tmp_path, "lossy", steps, "--drop", "0.05", "--delay",
+                       "0.05", "--delay-rounds", "2", "--fault-seed", "3", "--quiet")
     _finish(children, proc)
     run = tmp_path / "lossy"
     summary = json.loads((run / "summary.json").read_text())
