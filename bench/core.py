@@ -29,7 +29,7 @@ from phd_swarm.core.models import PRESETS
 from phd_swarm.core.ospa import ospa
 from phd_swarm.core.partition import bin_owners, partition
 from phd_swarm.core.scan import Scan
-from phd_swarm.sim.sensor import simulate_scan
+from phd_swarm.core.sensors.disk import simulate_scan
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)
 

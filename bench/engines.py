@@ -20,7 +20,7 @@ import numpy as np
 from results_io import machine_meta, write_results
 
 from phd_swarm.tools.sweep import make_engine
-from phd_swarm.tools.sweep_spec import controller_config, find_spec, load_spec
+from phd_swarm.tools.sweep_spec import find_spec, load_spec
 
 #: (spec, method, robots, targets or None, resolution, warm-up steps, measured steps).
 CASES = (
@@ -54,10 +54,9 @@ def measure(spec: str, method: str, robots: int, targets: int | None, res: float
     """Both engines on one trial; steps per second and their distance at the end."""
     trial = _trial(spec, method, robots, targets, res)
     sc = trial.scenario
-    cfg = controller_config(trial.controller, sc)
     rates, engines = {}, {}
     for name in ("distributed", "central"):
-        engines[name] = make_engine(name, sc, cfg)
+        engines[name] = make_engine(name, sc)
         rates[name] = _timed(engines[name], warmup, steps)
     d, c = engines["distributed"], engines["central"]
     ref = c.team_weights()

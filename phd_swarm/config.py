@@ -33,6 +33,7 @@ from typing import Any
 
 import yaml
 
+from phd_swarm.core.system import SystemConfig
 from phd_swarm.nodes.param_specs import NODES, SHARED, ParamSpec
 from phd_swarm.sim.scenario import Scenario, scenario_from_dict
 
@@ -54,6 +55,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     from that preset).
     """
     def plain(value: Any) -> Any:
+        if isinstance(value, SystemConfig):
+            return value.to_dict()
         if dataclasses.is_dataclass(value):
             return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
         if isinstance(value, tuple):
@@ -127,12 +130,16 @@ class RunConfig:
         Node kind (``world``, ``robot``, ``monitor``, ``recorder``) -> its parameters.
     source : str
         Where the config came from (for messages and metadata).
+    moved : tuple of str
+        Robot parameters of an older config read as ``scenario.system`` keys
+        (:data:`LEGACY_ROBOT_KEYS`).
     """
 
     scenario: Scenario
     shared: dict[str, Any] = field(default_factory=dict)
     nodes: dict[str, dict[str, Any]] = field(default_factory=dict)
     source: str = "<config>"
+    moved: tuple[str, ...] = ()
 
     def with_overrides(self, scenario: Scenario | None = None,
                        **node_params: Mapping[str, Any]) -> RunConfig:
@@ -208,8 +215,13 @@ def _check_block(block: Any, where: str, specs: tuple[ParamSpec, ...],
     return out
 
 
-def run_config_from_dict(doc: Any, where: str = "config") -> RunConfig:
-    """Validate a parsed config document (see the module docstring)."""
+def run_config_from_dict(doc: Any, where: str = "config",
+                         base_dir: str | Path | None = None) -> RunConfig:
+    """Validate a parsed config document (see the module docstring).
+
+    ``base_dir`` is where relative plugin files are taken from (the config file's
+    directory).
+    """
     if not isinstance(doc, Mapping):
         raise ValueError(f"{where}: expected a mapping at the top level, got {doc!r}")
     unknown = sorted(set(doc) - {SHARED_KEY, *NODE_KEYS})
@@ -222,13 +234,60 @@ def run_config_from_dict(doc: Any, where: str = "config") -> RunConfig:
     raw = doc[SHARED_KEY]["ros__parameters"].get("scenario")
     if raw is None:
         raise ValueError(f"{where}: {SHARED_KEY}: missing ros__parameters.scenario")
+    moved: tuple[str, ...] = ()
     if isinstance(raw, Mapping):
         flat = flatten(raw)
         raw = unflatten({k: v for k, v in flat.items()})
-    scenario = scenario_from_dict(raw, f"{where}: scenario")
+        doc, raw, moved = _moved_to_system(doc, raw)
+    scenario = scenario_from_dict(raw, f"{where}: scenario", base_dir)
     nodes = {kind: _check_block(doc[key], f"{where}: {key}", NODES[kind])
              for key, kind in NODE_KEYS.items() if key in doc}
-    return RunConfig(scenario, shared, nodes, where).checked()
+    return RunConfig(scenario, shared, nodes, where, moved).checked()
+
+
+#: Robot parameters of older configs (and the logs written with them) that are now
+#: ``scenario.system`` keys: the controller and its options.
+LEGACY_ROBOT_KEYS = {"controller": "controller", "rho_max": "options.rho_max",
+                     "cumulative_mode": "options.cumulative_mode"}
+
+
+def _moved_to_system(doc: Mapping[str, Any], scenario: dict[str, Any]
+                     ) -> tuple[Mapping[str, Any], dict[str, Any], tuple[str, ...]]:
+    """Read an older config whose robots set the controller and its options.
+
+    Robot ``controller``, ``rho_max`` and ``cumulative_mode`` become
+    ``scenario.system.controller`` and ``.options`` (docs/decisions.md). Options the
+    controller does not take (``rho_max`` of ``phd``) are dropped, as the robot ignored
+    them. A config that sets both places keeps ``scenario.system``.
+
+    Returns
+    -------
+    doc, scenario : the document without those robot parameters, the scenario with them
+    moved : tuple of str, the legacy keys found (empty for a current config)
+    """
+    block = doc.get("/**/robot")
+    params = block.get("ros__parameters") if isinstance(block, Mapping) else None
+    moved = tuple(sorted(set(LEGACY_ROBOT_KEYS) & set(params or {}))) \
+        if isinstance(params, Mapping) else ()
+    if not moved:
+        return doc, scenario, ()
+    system = dict(scenario.get("system") or {})
+    options = dict(system.get("options") or {})
+    controller = system.setdefault("controller", params.get("controller", "phd"))
+    from phd_swarm.core.registry import RegistryError, lookup
+
+    try:
+        taken = {spec.name for spec in lookup("controller", str(controller)).options}
+    except RegistryError:
+        taken = set()
+    for key in ("rho_max", "cumulative_mode"):
+        if key in params and key in taken:
+            options.setdefault(key, params[key])
+    if options:
+        system["options"] = options
+    robot = {k: v for k, v in params.items() if k not in LEGACY_ROBOT_KEYS}
+    return ({**doc, "/**/robot": {"ros__parameters": robot}},
+            {**scenario, "system": system}, moved)
 
 
 def read_yaml(path: str | Path, what: str = "file") -> Any:
@@ -246,4 +305,4 @@ def read_yaml(path: str | Path, what: str = "file") -> Any:
 
 def load_run_config(path: str | Path) -> RunConfig:
     """Read and validate a config file; errors name the file and the key."""
-    return run_config_from_dict(read_yaml(path, "config file"), str(path))
+    return run_config_from_dict(read_yaml(path, "config file"), str(path), Path(path).parent)

@@ -199,9 +199,11 @@ def small_static_scenario(robots: int = 5, steps: int = 64, seed: int = 7) -> An
         targets=TargetConfig(kind="static", count=12, draw_box=(0.0, 0.0, 40.0, 40.0)))
 
 
-def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str = "phd",
+def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str | None = None,
                 observers: int = 1, **world: Any) -> tuple[Any, Any, list[Any]]:
     """World, monitor (keeping its images) and one robot node per robot on ``ros``.
+
+    ``controller`` replaces ``scenario.system.controller`` if given.
 
     Writes the resolved parameter file to ``tmp_dir/params.yaml`` and starts every node
     from it, as the scripts do. Spin ``ros`` until ``monitor.done``.
@@ -221,9 +223,11 @@ def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str 
     from phd_swarm.nodes.topics import robot_namespace
     from phd_swarm.nodes.world import WorldNode
 
+    if controller is not None:
+        scenario = scenario.with_system(controller=controller)
     rc = RunConfig(scenario).with_overrides(
         world={"observers": observers, **world},
-        robot={"controller": controller, "observers": observers},
+        robot={"observers": observers},
         monitor={"progress_every": 0})
     params = rc.write_params(Path(tmp_dir) / "params.yaml")
     args = ["--ros-args", "--params-file", str(params)]

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Run one robot node: namespace /robot_<ID>, parameters from CONFIG.
-# Usage: scripts/run_robot.sh ID CONFIG [ROS args, e.g. -p controller:=uniform]
+# Usage: scripts/run_robot.sh ID CONFIG [ROS args, e.g. -p tick_period:=0.5]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [ $# -lt 2 ]; then echo "usage: $0 ID CONFIG [-p name:=value ...]" >&2; exit 2; fi

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Run a whole swarm (world, monitor, recorder, one process per robot) on this machine.
 # Usage: scripts/run_swarm.sh CONFIG [--robots N] [--targets M] [--duration S] [--seed K]
-#          [--controller phd|uniform|chen_p|chen_o] [--out DIR] [--name NAME] [--realtime]
+#          [--controller phd|uniform|chen_p|chen_o|<registered>] [--out DIR] [--name NAME] [--realtime]
 #          [--robots-per-process P] [--no-record]
 # Results: <out>/<name>/run.mcap, summary.json, config.yaml, logs/ (default out: runs/).
 set -euo pipefail

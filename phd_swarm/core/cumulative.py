@@ -35,11 +35,12 @@ Chen's "O" method) or of the PHD over its cell (eq. 14, the "P" method).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
-from .grid import Environment
+from .grid import Environment, Grid
 
 MODES = ("rate", "literal", "laplace")
 
@@ -201,6 +202,34 @@ def cumulative_update_counts(alpha: np.ndarray, n: np.ndarray, observations: np.
     if np.any(rew < 0) or np.any(rew > obs):
         raise ValueError("rewards must lie in [0, observations]")
     return a + rew, cnt + obs
+
+
+def observe_scans(grid: Grid, radius: float, alpha: np.ndarray, n: np.ndarray,
+                  scans: Iterable[tuple[np.ndarray, np.ndarray]]) -> None:
+    """Chen eq. 9-10 over the whole map, in place.
+
+    One observation per scan of each bin in its field of view, and one reward there if the
+    scan holds a measurement.
+
+    Parameters
+    ----------
+    grid : Grid
+        The bin grid.
+    radius : float
+        Sensing radius [m] (the field of view is :meth:`Grid.disk_bins`).
+    alpha : np.ndarray, shape (size,)
+        Rewards per bin (float), updated in place.
+    n : np.ndarray of int, shape (size,)
+        Observations per bin, updated in place.
+    scans : iterable of (sensor (2,), z (M, 2))
+        The scans of one or more steps; the counts are integers, so their order does not
+        matter.
+    """
+    for sensor, z in scans:
+        fov = grid.disk_bins(sensor, radius)
+        n[fov] += 1
+        if len(z):
+            alpha[fov] += 1.0
 
 
 def cumulative_weight(alpha: np.ndarray, n: np.ndarray, mode: str = "rate") -> np.ndarray:

@@ -10,51 +10,7 @@ The scenario itself is declared as read-only ``scenario.*`` parameters on every 
 
 from __future__ import annotations
 
-import math
-import numbers
-from dataclasses import dataclass
-from typing import Any
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    """One node parameter; its type is the type of ``default``.
-
-    ``low``/``high`` bound numbers (inclusive), ``choices`` lists allowed strings.
-    """
-
-    name: str
-    default: Any
-    description: str
-    low: float | None = None
-    high: float | None = None
-    choices: tuple[str, ...] = ()
-    read_only: bool = True
-
-    def check(self, value: Any, where: str) -> Any:
-        """Return ``value`` converted to the spec's type, or raise ValueError naming ``where``."""
-        kind = type(self.default)
-        if kind is bool:
-            ok = isinstance(value, bool)
-        elif kind is int:
-            ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
-        elif kind is float:
-            ok = (isinstance(value, numbers.Real) and not isinstance(value, bool)
-                  and math.isfinite(float(value)))
-        else:
-            ok = isinstance(value, kind)
-        if not ok:
-            raise ValueError(f"{where}: {self.name}: expected {kind.__name__}, got {value!r}")
-        value = kind(value)
-        if self.low is not None and value < self.low:
-            raise ValueError(f"{where}: {self.name}: must be >= {self.low}, got {value!r}")
-        if self.high is not None and value > self.high:
-            raise ValueError(f"{where}: {self.name}: must be <= {self.high}, got {value!r}")
-        if self.choices and value not in self.choices:
-            raise ValueError(f"{where}: {self.name}: must be one of {list(self.choices)}, "
-                             f"got {value!r}")
-        return value
-
+from phd_swarm.core.params import ParamSpec
 
 #: Parameters every node has (the ``/**`` block of a config file), besides ``scenario.*``.
 SHARED = (
@@ -84,14 +40,6 @@ WORLD = (
 ROBOT = (
     ParamSpec("robot_id", -1, "Id of this robot in the team (0..robots-1); required.",
               low=-1, high=1_000_000),
-    ParamSpec("controller", "phd", "Controller: phd (Lloyd with the PHD, Dames eq. 8), "
-              "uniform (coverage baseline), chen_p, chen_o (power diagram, Chen Sec. 3).",
-              choices=("phd", "uniform", "chen_p", "chen_o")),
-    ParamSpec("rho_max", 0.0, "Cap on the power weight rho for chen_* [m]; 0 uses the "
-              "sensing radius (docs/decisions.md).", low=0.0, high=1e6),
-    ParamSpec("cumulative_mode", "rate", "Chen eq. 11: rate (default) or literal reading, "
-              "or laplace: the rule of succession (docs/decisions.md).",
-              choices=("rate", "literal", "laplace")),
     ParamSpec("tick_period", 1.0, "Wall seconds without a new protocol message after which "
               "one timeout round passes, and a waiting robot sends a keep-alive; also the "
               "period of its WORKING status to the world while a step lasts [s].",

@@ -18,6 +18,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from phd_swarm.config import flatten, scenario_to_dict, unflatten
+from phd_swarm.core.registry import ROLES
+from phd_swarm.core.system import DEFAULT_PARTS, SystemConfig
 from phd_swarm.nodes.param_specs import ParamSpec
 from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 
@@ -83,8 +85,14 @@ def declare_scenario(node: Node) -> Scenario:
         raise ParameterError(f"{where}.preset: unknown preset {preset!r}; expected one of "
                              f"{sorted(keys)}")
     names = sorted({k for flat in keys.values() for k in flat} - {"preset"})
-    defaults = keys[preset]
+    defaults = dict(keys[preset])
     values: dict[str, Any] = {"preset": preset}
+    # The options depend on the parts chosen (and plugins may bring parts): read the
+    # part names first, then declare the options of those parts.
+    system = _declare_system(node, values)
+    names = [n for n in names if not n.startswith("system.")]
+    defaults.update({f"system.options.{k}": v for k, v in system.options})
+    names += [f"system.options.{k}" for k, _ in system.options]
     for name in names:
         d = ParameterDescriptor(read_only=True, dynamic_typing=True,
                                 description=f"Scenario field {name} (docs/parameters.md).")
@@ -99,3 +107,28 @@ def declare_scenario(node: Node) -> Scenario:
         return scenario_from_dict(unflatten(values), where)
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
+
+
+def _declare_system(node: Node, values: dict[str, Any]) -> SystemConfig:
+    """Declare ``scenario.system.<role>`` and ``.plugins``; the system they name (no options).
+
+    The values go into ``values`` (flattened scenario keys).
+    """
+    where = f"node {node.get_fully_qualified_name()} parameters scenario.system"
+    for role in ROLES:
+        d = ParameterDescriptor(read_only=True, description=(
+            f"The system's {role} (registered name, docs/architecture.md); default "
+            f"{DEFAULT_PARTS[role]}."))
+        values[f"system.{role}"] = node.declare_parameter(f"scenario.system.{role}",
+                                                          DEFAULT_PARTS[role], d).value
+    d = ParameterDescriptor(read_only=True, dynamic_typing=True, description=(
+        "Modules or .py files that register more system parts (docs/architecture.md)."))
+    p = node.declare_parameter("scenario.system.plugins", None, d)
+    if p.type_ != Parameter.Type.NOT_SET:
+        values["system.plugins"] = list(p.value)
+    try:
+        return SystemConfig.from_dict({role: values[f"system.{role}"] for role in ROLES}
+                                      | {"plugins": values.get("system.plugins", [])},
+                                      "system")
+    except ValueError as exc:
+        raise ParameterError(f"{where}: {exc}") from None

@@ -1,8 +1,11 @@
 """Robot node: one robot's distributed PHD filter and controller over ROS topics.
 
-A thin adapter over :class:`phd_swarm.core.protocol.robot.RobotFilter` (Dames Alg. 1-2,
-Chen's cumulative state) and :func:`phd_swarm.core.controller.decide` (Dames eq. 8, Chen
-eq. 2-3 and 12-14). Per step k:
+A thin adapter over :class:`phd_swarm.core.agent.Agent`, the one agent step the in-memory
+engine runs too, with the parts that ``scenario.system`` names (:mod:`phd_swarm.core.registry`;
+for Dames' and Chen's systems the exchange is
+:class:`phd_swarm.core.protocol.robot.RobotFilter`, Dames Alg. 1-2 with Chen's cumulative
+state, and the controllers are those of :mod:`phd_swarm.core.controllers`, Dames eq. 8,
+Chen eq. 2-3 and 12-14). Per step k:
 
 1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
    q^k): the step starts, and the protocol's messages go to the contacts' inboxes
@@ -60,45 +63,24 @@ from geometry_msgs.msg import Point, PoseStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
-from phd_swarm.core.controller import ControllerConfig, decide
-from phd_swarm.core.extraction import expected_cardinality, extract_targets
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.agent import Team
 from phd_swarm.core.protocol.faults import FaultyLink, LinkFaults
-from phd_swarm.core.protocol.messages import (
-    CellMsg,
-    Envelope,
-    EtaPartialMsg,
-    EtaTotalMsg,
-    Message,
-    ScanMsg,
-    StateMsg,
-    TransferMsg,
-    sender_of,
-)
-from phd_swarm.core.protocol.robot import FilterContext, ProtocolError, RobotFilter
+from phd_swarm.core.protocol.messages import Envelope, Message, ScanMsg
+from phd_swarm.core.protocol.robot import ProtocolError
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.param_specs import ROBOT, SHARED
 from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.wire import wire_for
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
-    EtaPartial,
-    EtaTotal,
     MeasurementSet,
-    ParticleTransfer,
-    RobotState,
     RobotStatus,
     TargetSet,
     TeamState,
 )
-
-#: Inbox kind of each core message type.
-_KIND = {StateMsg: "state", CellMsg: "cell", ScanMsg: "measurements",
-         EtaPartialMsg: "eta_partial", EtaTotalMsg: "eta_total", TransferMsg: "particles"}
-_ROS_TYPE = {"state": RobotState, "cell": CellPolygon, "measurements": MeasurementSet,
-             "eta_partial": EtaPartial, "eta_total": EtaTotal, "particles": ParticleTransfer}
 
 #: Wall seconds without any executor callback after which a robot stops saying it is alive.
 HUNG_AFTER = 30.0
@@ -135,20 +117,15 @@ class RobotNode(Node):
         self.frame_id = self.params["world_frame_id"]
         self.dt = self.scenario.dt
         self.grid = self.scenario.grid
-        rho_max = self.params["rho_max"] or self.scenario.models.detection.radius
-        self.controller = ControllerConfig(self.params["controller"], rho_max,
-                                           self.params["cumulative_mode"])
-        self.ctx = FilterContext(self.grid, self.scenario.models,
-                                 cumulative=self.controller.uses_cumulative,
-                                 timeout_ticks=self.params["timeout_ticks"],
-                                 max_step=self.scenario.robot_max_speed * self.dt)
-        self.filter = RobotFilter(rid, self.ctx)
+        self.agent = Team.build(self.scenario,
+                                timeout_ticks=self.params["timeout_ticks"]).agent(rid)
+        #: The exchange participant (Dames' protocol): step state, cell, bins, counters.
+        self.filter = self.agent.exchange
+        #: How the exchange's messages travel (inbox kinds, ROS types, conversions).
+        self.wire = wire_for(self.agent.team.parts["exchange"])
         self.team_ids: frozenset[int] = frozenset()
         self.initialised = False
         self.ready = False
-        self.power_weight = 0.0
-        self.z = np.empty((0, 2))
-        self.position = np.zeros(2)
         self.pending: deque[ScanMsg] = deque()
         self.last_scan_step = -1
         self.counters: dict[str, int] = defaultdict(int)
@@ -185,7 +162,7 @@ class RobotNode(Node):
                                                    publisher_qos("STEP"))
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
                                  subscription_qos("STEP"))
-        for kind, typ in _ROS_TYPE.items():
+        for kind, typ in self.wire.types.items():
             self.create_subscription(typ, f"inbox/{kind}", self._make_inbox_callback(kind),
                                      subscription_qos("INBOX"))
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
@@ -201,7 +178,7 @@ class RobotNode(Node):
         self._beat = threading.Thread(target=self._heartbeat, name=f"heartbeat_{rid}",
                                       daemon=True)
         self._beat.start()
-        self.get_logger().info(f"robot {rid}: {self.controller.kind} controller, "
+        self.get_logger().info(f"robot {rid}: system {self.scenario.system.label()}, "
                                f"{self.scenario.name}, {self.scenario.robots} robots")
 
     # ------------------------------------------------------------------ start-up
@@ -218,7 +195,7 @@ class RobotNode(Node):
             if self.robot_id not in ids:
                 raise convert.InvalidMessage(f"robot {self.robot_id} is not in the team")
             if not self.initialised:
-                self.filter.initialise(ids, pos)
+                self.agent.initialise(ids, pos)
         except (ValueError, convert.InvalidMessage) as exc:
             self._reject("team_state", f"team state from {T.WORLD_ROBOTS}: {exc}")
             return
@@ -244,7 +221,7 @@ class RobotNode(Node):
         processes); doing it between steps keeps it off the step's critical path.
         """
         for c in self.filter.contacts:
-            for kind in _ROS_TYPE:
+            for kind in self.wire.types:
                 self._peer_publisher(c, kind)
 
     def _check_ready(self) -> None:
@@ -309,20 +286,16 @@ class RobotNode(Node):
                 continue  # a step of the team's, from before this robot came back
             try:
                 if self.evicted:
-                    self.filter.rejoin(scan.step, ids, pos, alive)
+                    self.agent.rejoin(scan.step, ids, pos, alive)
                     self.evicted = False
-                    self.power_weight = 0.0
                     self._held.clear()
                     self.get_logger().warning(f"robot {self.robot_id}: rejoined the team at "
                                               f"step {scan.step}")
                 else:
-                    self.filter.observe_team(scan.step, ids, pos, alive)
+                    self.agent.observe_team(scan.step, ids, pos, alive)
                 self._forget_teams(scan.step)
-                self.position = scan.sensor
-                self.z = scan.z
                 self._sent = 0
-                out = self.filter.start_step(scan.step, scan.sensor, self.power_weight,
-                                             scan.z)
+                out = self.agent.start_step(scan.step, scan.sensor, scan.z)
             except (ProtocolError, ValueError) as exc:
                 self._reject("step", f"cannot start step {scan.step}: {exc}")
                 return
@@ -342,7 +315,7 @@ class RobotNode(Node):
     def _on_inbox(self, kind: str, ros_msg) -> None:
         self._alive_at = time.monotonic()
         try:
-            msg = convert.from_ros(ros_msg, self.grid, self.params["max_measurements"])
+            msg = self.wire.from_ros(ros_msg, self.grid, self.params["max_measurements"])
             self._check_welcome(msg)
         except convert.InvalidMessage as exc:
             self._reject(kind, f"inbox/{kind}: {exc}")
@@ -351,26 +324,23 @@ class RobotNode(Node):
         if self.evicted:
             return
         # A keep-alive (a repeated state) does not hold this robot's own rounds back.
-        if self.filter.receive(msg):
+        if self.agent.receive(msg):
             self._heard = True
         # Also when the step is done: a peer's keep-alive may ask for a re-send.
-        self._send(self.filter.advance())
+        self._send(self.agent.advance())
         self._after_progress()
 
     def _check_welcome(self, msg: Message) -> None:
-        src = sender_of(msg)
+        src = self.wire.sender(msg)
         if src == self.robot_id:
             raise convert.InvalidMessage(f"sender claims this robot's own id {src} (duplicate "
                                          "robot id?)")
         if src not in self.team_ids:
             raise convert.InvalidMessage(f"unknown robot id {src}; the team is "
                                          f"0..{self.scenario.robots - 1}")
-        if isinstance(msg, TransferMsg) and msg.to_id != self.robot_id:
-            raise convert.InvalidMessage(f"transfer addressed to robot {msg.to_id}")
-        if isinstance(msg, EtaPartialMsg) and msg.active_id != self.robot_id:
-            raise convert.InvalidMessage(f"partial sums for robot {msg.active_id}")
-        if isinstance(msg, ScanMsg) and len(msg.z) > self.params["max_measurements"]:
-            raise convert.InvalidMessage("too many measurements")
+        to = self.wire.addressee(msg)
+        if to is not None and to != self.robot_id:
+            raise convert.InvalidMessage(f"{type(msg).__name__} addressed to robot {to}")
         if not 0 <= msg.step < self.scenario.steps or msg.step > self.last_scan_step + 2:
             raise convert.InvalidMessage(f"step {msg.step} out of range (current "
                                          f"{self.filter.step}, steps {self.scenario.steps})")
@@ -389,7 +359,7 @@ class RobotNode(Node):
         if self._heard:
             self._heard = False
             return
-        self._send(self.filter.tick())
+        self._send(self.agent.tick())
         self._after_progress()
 
     def _heartbeat(self) -> None:
@@ -439,21 +409,21 @@ class RobotNode(Node):
         self._finished = k
         for old in [s for s in self._received if s < k]:
             del self._received[old]
-        d = decide(self.controller, self.grid, self.position, f.cell, f.bins, f.weights,
-                   len(self.z) > 0, f.alpha, f.count)
-        self.power_weight = d.power_weight
+        d = self.agent.finish_step()
+        position = self.agent.position
         self._prepare_peers()
         if self.params["publish_density"]:
             self.density_pub.publish(convert.density_grid(self.robot_id, k, self.grid, f.bins,
                                                           f.weights, self.dt, self.frame_id))
         self.cell_pub.publish(CellPolygon(
             header=convert.header(k, self.dt, self.frame_id), robot_id=self.robot_id, step=k,
-            generator=Point(x=float(self.position[0]), y=float(self.position[1])),
+            generator=Point(x=float(position[0]), y=float(position[1])),
             power_weight=float(d.power_weight), vertices=convert.points(f.cell),
             neighbour_ids=convert.u32(f.neighbours)))
-        est = self._local_estimates()
+        estimator = self.agent.estimator
+        est = estimator.estimates(f.bins, f.weights)
         self.estimates_pub.publish(convert.target_set(
-            self.robot_id, k, np.arange(len(est)), est, expected_cardinality(f.weights),
+            self.robot_id, k, np.arange(len(est)), est, estimator.expected_count(f.weights),
             self.dt, self.frame_id))
         self.goal_pub.publish(convert.pose_stamped(d.goal, k, self.dt, self.frame_id))
         stats = f.stats
@@ -471,23 +441,6 @@ class RobotNode(Node):
             revived_peers=int(stats.get("revived_peers", 0)),
             dead_ids=convert.u32(sorted(f.dead))))
 
-    def _local_estimates(self) -> np.ndarray:
-        """Estimates from the own bins: extraction on the window around the cell."""
-        f = self.filter
-        if f.bins.size == 0:
-            return np.empty((0, 2))
-        nx = self.grid.shape[1]
-        rows, cols = np.divmod(f.bins, nx)
-        r0, c0 = int(rows.min()), int(cols.min())
-        h, w = int(rows.max()) - r0 + 1, int(cols.max()) - c0 + 1
-        res = self.grid.resolution
-        env = self.grid.env
-        sub = Grid(Environment(env.xmin + c0 * res, env.ymin + r0 * res,
-                               env.xmin + (c0 + w) * res, env.ymin + (r0 + h) * res), res)
-        image = np.zeros((h, w))
-        image[rows - r0, cols - c0] = f.weights
-        return extract_targets(sub, image, self.scenario.extraction)
-
     # ---------------------------------------------------------------- transport
     def _send(self, envelopes: list[Envelope]) -> None:
         """Publish envelopes to their receivers' inboxes, through the (faulty) link."""
@@ -498,8 +451,8 @@ class RobotNode(Node):
         self._sent += len(envelopes)
 
     def _publish(self, env: Envelope) -> None:
-        pub = self._peer_publisher(env.dst, _KIND[type(env.msg)])
-        pub.publish(convert.to_ros(env.msg, self.dt, self.frame_id))
+        pub = self._peer_publisher(env.dst, self.wire.kind(env.msg))
+        pub.publish(self.wire.to_ros(env.msg, self.dt, self.frame_id))
 
     def _release_held(self) -> None:
         """One tick period passed: publish the delayed envelopes that are due."""
@@ -517,7 +470,8 @@ class RobotNode(Node):
     def _peer_publisher(self, dst: int, kind: str):
         pub = self._peer_pubs.get((dst, kind))
         if pub is None:
-            pub = self.create_publisher(_ROS_TYPE[kind], T.robot_topic(dst, f"inbox/{kind}"),
+            pub = self.create_publisher(self.wire.types[kind],
+                                        T.robot_topic(dst, f"inbox/{kind}"),
                                         publisher_qos("INBOX"))
             self._peer_pubs[(dst, kind)] = pub
         return pub

@@ -6,8 +6,11 @@ team PHD (eq. 3-6), up to the rounding of sums taken in another order
 a run of the papers' algorithms can be computed without the protocol, as the papers' own
 simulations are: one :class:`~phd_swarm.core.central.CentralPhdFilter` over the whole map,
 one partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of
-Dames eq. 7 when every power weight is 0), and each robot's controller
-(:func:`phd_swarm.core.controller.decide`) on its own cell, bins and masses. Chen's
+Dames eq. 7 when every power weight is 0), and each robot's controller (the same
+registered controller objects and generators the agents have,
+:mod:`phd_swarm.core.controllers`) on its own cell, bins and masses. It runs the systems
+whose estimator has a central form (``grid_phd``) and whose exchange partitions the map
+(``voronoi_phd``); other systems run on the distributed engine. Chen's
 cumulative state (eq. 9-10) is counted per bin: alpha and n are whole numbers, so they are
 exactly those the robots carry.
 
@@ -36,8 +39,9 @@ from functools import partial
 import numpy as np
 
 from phd_swarm.core import phd_grid
-from phd_swarm.core.central import CentralPhdFilter
-from phd_swarm.core.controller import ControllerConfig, as_controller, decide
+from phd_swarm.core.agent import Team, robot_generator
+from phd_swarm.core.controllers.base import CellDensity, Knowledge
+from phd_swarm.core.cumulative import observe_scans
 from phd_swarm.core.partition import bin_owners, cell_of
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
@@ -50,21 +54,36 @@ class CentralEngine:
     Parameters
     ----------
     scenario : Scenario
-        Map, models, team, targets, duration, seed.
-    controller : ControllerConfig or str
-        Controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``) or full config.
+        Map, models, team, targets, duration, seed, and the system (``scenario.system``).
+    controller : str, optional
+        Shorthand for ``scenario.with_system(controller=...)``.
+
+    Raises
+    ------
+    ValueError
+        If the system has no central form (see the module docstring).
     """
 
-    def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd") -> None:
+    def __init__(self, scenario: Scenario, controller: str | None = None) -> None:
+        if controller is not None:
+            scenario = scenario.with_system(controller=controller)
         self.scenario = scenario
-        self.controller = controller = as_controller(controller,
-                                                     scenario.models.detection.radius)
         self.grid = scenario.grid
+        team = Team.build(scenario)
+        central = team.parts["estimator"].extras.get("central")
+        if central is None or "cell" not in team.parts["exchange"].provides:
+            raise ValueError(f"the central engine needs an estimator with a central form and "
+                             f"an exchange that partitions the map; system "
+                             f"{scenario.system.label()} has "
+                             f"{scenario.system.estimator}/{scenario.system.exchange}: use "
+                             f"the distributed engine")
         self.world = World(scenario)
-        self.filter = CentralPhdFilter(self.grid, scenario.models)
+        self.filter = central(scenario)
         ids = self.world.robot_ids
+        self.controllers = [team.make("controller", int(i)) for i in ids]
+        self.rngs = [robot_generator(scenario.seed, int(i)) for i in ids]
         self.power_weights = np.zeros(len(ids))
-        self.cumulative = controller.uses_cumulative
+        self.cumulative = "cumulative" in team.parts["controller"].requires
         self.alpha = np.zeros(self.grid.size) if self.cumulative else None
         self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
         self.owners = np.empty(0, dtype=np.int64)
@@ -101,7 +120,8 @@ class CentralEngine:
             self.filter.predict()
         self.filter.update_all(ordered)
         if self.cumulative:
-            self._count_observations(ordered)
+            observe_scans(grid, self.scenario.models.detection.radius, self.alpha, self.count,
+                          ((scan.sensor, scan.z) for scan in ordered))
         w = self.filter.weights.reshape(-1)
         goals = {}
         goal_rows = np.empty((len(ids), 2))
@@ -113,10 +133,11 @@ class CentralEngine:
             bins = order[starts[r]:starts[r + 1]]
             # The polygon is only needed where the weights of the bins are all 0 (the
             # centroid's fallback): computed then.
-            d = decide(self.controller, grid, positions[r], partial(self.cell, r), bins,
-                       w[bins], len(scans[rid]) > 0,
-                       None if self.alpha is None else self.alpha[bins],
-                       None if self.count is None else self.count[bins])
+            local = CellDensity(grid, partial(self.cell, r), bins, w[bins],
+                                None if self.alpha is None else self.alpha[bins],
+                                None if self.count is None else self.count[bins])
+            d = self.controllers[r].decide(Knowledge(rid, k, positions[r], scans[rid], local),
+                                           self.rngs[r])
             goals[rid] = d.goal
             goal_rows[r] = d.goal
             self.power_weights[r] = d.power_weight
@@ -156,20 +177,15 @@ class CentralEngine:
         positions, rho = self._generators
         return cell_of(self.scenario.grid.env, row, positions, rho)[0]
 
-    def _count_observations(self, scans: list[Scan]) -> None:
-        """Chen eq. 9-10: one observation per scan of each bin in its field of view."""
-        radius = self.scenario.models.detection.radius
-        for scan in scans:
-            fov = self.grid.disk_bins(scan.sensor, radius)
-            self.count[fov] += 1
-            if len(scan.z):
-                self.alpha[fov] += 1.0
-
     def run(self, steps: int | None = None) -> None:
         """Run ``steps`` steps (default: the rest of the scenario)."""
         n = self.scenario.steps - self.world.step_index if steps is None else steps
         for _ in range(n):
             self.step()
+
+    def counters(self) -> dict[str, int]:
+        """Protocol counters: none (there is no protocol), for the engines' one interface."""
+        return {}
 
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx)."""

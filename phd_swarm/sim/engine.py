@@ -13,10 +13,13 @@ One step k:
    robot revived (:meth:`InMemoryEngine.revive`, :meth:`RobotFilter.rejoin`) is admitted
    again;
 1. the world gives each live robot its measurement set Z^k at its position q^k;
-2. the robots run one protocol step (:class:`phd_swarm.core.protocol.robot.RobotFilter`),
-   messages being delivered until every live robot is done (rounds without progress are
-   :meth:`RobotFilter.tick` s, which time out dead peers);
-3. each robot's controller picks its goal and next power weight;
+2. the robots run one step of their exchange (for Dames' system the protocol of
+   :class:`phd_swarm.core.protocol.robot.RobotFilter`), messages being delivered until every
+   live robot is done (rounds without progress are ticks, which time out dead peers);
+3. each robot's controller picks its goal and next power weight.
+
+Steps 0-3 are those of :class:`phd_swarm.core.agent.Agent`, the one agent step that the ROS
+robot node runs too, for whatever system ``scenario.system`` names;
 4. the world moves the robots toward their goals and the targets, to step k+1.
 
 With ``reference=True`` a :class:`CentralPhdFilter` is fed the same measurement sets in
@@ -42,11 +45,11 @@ from itertools import groupby
 
 import numpy as np
 
+from phd_swarm.core.agent import Team
 from phd_swarm.core.central import CentralPhdFilter
-from phd_swarm.core.controller import ControllerConfig, as_controller, decide
+from phd_swarm.core.exchange.voronoi_phd import TIMEOUT_TICKS
 from phd_swarm.core.protocol.faults import FaultyLink, LinkFaults
 from phd_swarm.core.protocol.messages import Envelope, Message, TransferKind, TransferMsg
-from phd_swarm.core.protocol.robot import FilterContext, RobotFilter
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.world import World
@@ -95,9 +98,11 @@ class InMemoryEngine:
     Parameters
     ----------
     scenario : Scenario
-        Map, models, team, targets, duration, seed.
-    controller : ControllerConfig or str
-        Controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``) or full config.
+        Map, models, team, targets, duration, seed, and the system the robots run
+        (``scenario.system``).
+    controller : str, optional
+        Shorthand for ``scenario.with_system(controller=...)``: run this controller
+        (``phd``, ``uniform``, ``chen_p``, ``chen_o``, or any registered) instead.
     delivery_seed : int, optional
         Shuffle the delivery order with this seed (None: first in, first out).
     reference : bool
@@ -110,24 +115,21 @@ class InMemoryEngine:
         ``[faults.seed, robot id]``). None: perfect links.
     """
 
-    def __init__(self, scenario: Scenario, controller: ControllerConfig | str = "phd",
+    def __init__(self, scenario: Scenario, controller: str | None = None,
                  delivery_seed: int | None = None, reference: bool = False,
-                 timeout_ticks: int = 3, faults: LinkFaults | None = None) -> None:
+                 timeout_ticks: int = TIMEOUT_TICKS, faults: LinkFaults | None = None) -> None:
+        if controller is not None:
+            scenario = scenario.with_system(controller=controller)
         self.scenario = scenario
-        self.controller = controller = as_controller(controller,
-                                                     scenario.models.detection.radius)
         self.grid = scenario.grid
         self.world = World(scenario)
-        self.ctx = FilterContext(self.grid, scenario.models,
-                                 cumulative=controller.uses_cumulative,
-                                 timeout_ticks=timeout_ticks,
-                                 max_step=scenario.robot_max_speed * scenario.dt)
+        self.team = Team.build(scenario, timeout_ticks=timeout_ticks)
+        self.timeout_ticks = timeout_ticks
         ids = self.world.robot_ids
-        self.robots = {int(i): RobotFilter(int(i), self.ctx) for i in ids}
+        self.agents = {int(i): self.team.agent(int(i)) for i in ids}
         positions = self.world.robot_positions
-        for robot in self.robots.values():
-            robot.initialise(ids, positions)
-        self.power_weights = {int(i): 0.0 for i in ids}
+        for agent in self.agents.values():
+            agent.initialise(ids, positions)
         self.killed: set[int] = set()
         #: Killed robots the team has not yet seen dead at the start of a step.
         self._unseen_dead: set[int] = set()
@@ -180,14 +182,27 @@ class InMemoryEngine:
         self.killed.discard(rid)
         self.world.revive(rid)
         if restart:
-            self.robots[rid] = RobotFilter(rid, self.ctx)
-        self.power_weights[rid] = 0.0
-        self.robots[rid].rejoin(self.world.step_index, self.world.robot_ids,
+            self.agents[rid] = self.team.agent(rid)
+        self.agents[rid].rejoin(self.world.step_index, self.world.robot_ids,
                                 self.world.robot_positions, self.world.alive)
+
+    @property
+    def robots(self) -> dict[int, object]:
+        """Robot id -> its exchange participant.
+
+        For Dames' system a :class:`~phd_swarm.core.protocol.robot.RobotFilter` (bins,
+        weights, counters).
+        """
+        return {rid: agent.exchange for rid, agent in self.agents.items()}
+
+    @property
+    def power_weights(self) -> dict[int, float]:
+        """Robot id -> the power weight its state carries at the next step."""
+        return {rid: agent.power_weight for rid, agent in self.agents.items()}
 
     def live_ids(self) -> list[int]:
         """Ids of the robots not killed, ascending."""
-        return [i for i in sorted(self.robots) if i not in self.killed]
+        return [i for i in sorted(self.agents) if i not in self.killed]
 
     def step(self) -> None:
         """Run one full step (scan, protocol, control, world motion)."""
@@ -200,21 +215,13 @@ class InMemoryEngine:
         queue: list[Envelope] = []
         for rid in self.live_ids():
             z = scans.get(rid, np.empty((0, 2)))
-            queue.extend(self.robots[rid].start_step(k, positions[rid], self.power_weights[rid],
-                                                      z))
+            queue.extend(self.agents[rid].start_step(k, positions[rid], z))
         if self.links is None:
             self._deliver(queue, traffic)
         else:
             self._deliver_lossy(queue, traffic)
         self.traffic.append(traffic)
-        goals = {}
-        for rid in self.live_ids():
-            robot = self.robots[rid]
-            z = scans.get(rid, np.empty((0, 2)))
-            d = decide(self.controller, self.grid, positions[rid], robot.cell, robot.bins,
-                       robot.weights, len(z) > 0, robot.alpha, robot.count)
-            goals[rid] = d.goal
-            self.power_weights[rid] = d.power_weight
+        goals = {rid: self.agents[rid].finish_step().goal for rid in self.live_ids()}
         self.last_scans = scans
         if self.central is not None:
             self.central.step([Scan(rid, k, positions[rid], scans[rid])
@@ -228,7 +235,7 @@ class InMemoryEngine:
         ids = self.world.robot_ids
         positions = self.world.robot_positions
         for rid in self.live_ids():
-            self.robots[rid].observe_team(k, ids, positions, alive)
+            self.agents[rid].observe_team(k, ids, positions, alive)
         self._unseen_dead.clear()
 
     def run(self, steps: int | None = None) -> None:
@@ -247,9 +254,9 @@ class InMemoryEngine:
         once, the finest interleaving. The result does not depend on the order (tested).
         """
         shuffle = self._rng is not None
-        robots = self.robots
+        robots = self.agents
         stalls = 0
-        limit = 4 * self.ctx.timeout_ticks + 8
+        limit = 4 * self.timeout_ticks + 8
         queue: list[Envelope] = list(initial)
         while True:
             while queue:
@@ -267,7 +274,7 @@ class InMemoryEngine:
                 return
             stalls += 1
             if stalls > limit:
-                phases = {rid: robots[rid].phase.value for rid in waiting}
+                phases = {rid: robots[rid].exchange.phase.value for rid in waiting}
                 raise DeadlockError(f"step {self.world.step_index}: robots still waiting after "
                                     f"{limit} rounds without progress: {phases}")
             for rid in waiting:
@@ -284,9 +291,9 @@ class InMemoryEngine:
         got further (:attr:`RobotFilter.progress`), which the robots' own timeouts rule out
         unless the protocol is broken.
         """
-        robots = self.robots
+        robots = self.agents
         assert self.faults is not None
-        limit = 4 * self.ctx.timeout_ticks + 8 + self.faults.max_delay_rounds
+        limit = 4 * self.timeout_ticks + 8 + self.faults.max_delay_rounds
         stalls, marker = 0, None
         self._route(initial, traffic)
         while True:
@@ -302,11 +309,11 @@ class InMemoryEngine:
             waiting = [rid for rid in self.live_ids() if not robots[rid].done]
             if not waiting:
                 return
-            now = [robots[rid].progress for rid in waiting]
+            now = [robots[rid].exchange.progress for rid in waiting]
             stalls = stalls + 1 if now == marker else 1
             marker = now
             if stalls > limit:
-                phases = {rid: robots[rid].phase.value for rid in waiting}
+                phases = {rid: robots[rid].exchange.phase.value for rid in waiting}
                 raise DeadlockError(f"step {self.world.step_index}: robots still waiting after "
                                     f"{limit} rounds without progress: {phases}")
             for rid in waiting:
@@ -331,7 +338,7 @@ class InMemoryEngine:
         Receivers come in the order of their first message. Messages from or to a killed
         robot are lost (counted in ``traffic.lost``).
         """
-        robots, killed = self.robots, self.killed
+        robots, killed = self.agents, self.killed
         messages, sizes = traffic.messages, traffic.bytes
         receivers: dict[int, None] = {}
         last, kind, size = None, "", 0
@@ -353,7 +360,7 @@ class InMemoryEngine:
         """The team PHD as an image (ny, nx): the union of the live robots' bins."""
         img = np.zeros(self.grid.size)
         for rid in self.live_ids():
-            robot = self.robots[rid]
+            robot = self.agents[rid].exchange
             img[robot.bins] += robot.weights
         return img.reshape(self.grid.shape)
 
@@ -361,7 +368,7 @@ class InMemoryEngine:
         """How many live robots own each bin, shape (size,); a partition gives all ones."""
         counts = np.zeros(self.grid.size, dtype=np.int64)
         for rid in self.live_ids():
-            np.add.at(counts, self.robots[rid].bins, 1)
+            np.add.at(counts, self.agents[rid].exchange.bins, 1)
         return counts
 
     def counters(self) -> dict[str, int]:

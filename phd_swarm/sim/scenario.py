@@ -15,14 +15,16 @@ import dataclasses
 import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
 from typing import Any
 
 from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
+from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
 #: Side of the extraction window [m]: Dames' 3 x 3 bins of 1 m (Sec. IV).
@@ -186,8 +188,9 @@ class Scenario:
     resolution : float
         Side of the filter's square bins [m] (Dames: 1; Chen: 0.1); must tile E.
     models : PhdModels
-        The filter's target and sensor models; the simulated sensor draws from the same
-        detection, measurement and clutter models (:mod:`phd_swarm.sim.sensor`).
+        The filter's target and sensor models; the simulated sensor (the ``disk`` sensor,
+        :mod:`phd_swarm.core.sensors.disk`) draws from the same detection, measurement and
+        clutter models.
     dt : float
         Time step [s]: one scan, one filter update and one move per step (Dames Sec. IV:
         the sensor runs at 2 Hz, so 0.5).
@@ -211,7 +214,11 @@ class Scenario:
     ospa_p : float
         OSPA order p >= 1, may be inf (both papers: 1).
     seed : int
-        Seed of the world's random streams, >= 0 (:class:`phd_swarm.sim.world.World`).
+        Seed of the world's random streams, >= 0 (:class:`phd_swarm.sim.world.World`), and
+        of the robots' own (:func:`phd_swarm.core.agent.robot_generator`).
+    system : SystemConfig
+        The parts the robots run (sensor, estimator, exchange, controller) and their
+        options (:mod:`phd_swarm.core.system`); default: Dames' PHD-weighted Lloyd.
     """
 
     name: str
@@ -228,6 +235,7 @@ class Scenario:
     ospa_c: float = 10.0
     ospa_p: float = 1.0
     seed: int = 0
+    system: SystemConfig = field(default_factory=SystemConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -265,6 +273,8 @@ class Scenario:
         _real("ospa_c", self.ospa_c, strict=True)
         _real("ospa_p", self.ospa_p, low=1.0, allow_inf=True)
         _int("seed", self.seed, 0)
+        if not isinstance(self.system, SystemConfig):
+            raise ValueError(f"system must be a SystemConfig, got {type(self.system).__name__}")
 
     @property
     def steps(self) -> int:
@@ -290,6 +300,13 @@ class Scenario:
     def with_overrides(self, **changes: Any) -> Scenario:
         """A copy with some fields replaced (``dataclasses.replace``), validated again."""
         return dataclasses.replace(self, **changes)
+
+    def with_system(self, **changes: Any) -> Scenario:
+        """A copy with some parts, options or plugins of :attr:`system` replaced.
+
+        See :meth:`SystemConfig.with_parts`; e.g. ``with_system(controller="uniform")``.
+        """
+        return self.with_overrides(system=self.system.with_parts(**changes))
 
 
 def dames_static(robots: int = 20, targets: int = 30, resolution: float = 1.0) -> Scenario:
@@ -460,13 +477,15 @@ def _merge_targets(base: TargetConfig, value: Any, path: str) -> TargetConfig:
     return dataclasses.replace(base, **kw)
 
 
-def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario") -> Scenario:
+def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
+                       base_dir: str | Path | None = None) -> Scenario:
     """Build a scenario from a nested mapping: a preset plus overrides.
 
     ``d["preset"]`` names one of :data:`PRESETS`; every other key overrides the field of
     the same name. ``env``, ``models`` and ``targets`` are mappings merged key by key into
     the preset's (e.g. ``{"models": {"detection": {"p_d": 0.9}}}`` keeps the preset's
-    radius). Boxes are lists of four numbers, ``clusters`` a list of boxes.
+    radius); ``system`` names the parts and options (:class:`SystemConfig`). Boxes are
+    lists of four numbers, ``clusters`` a list of boxes.
 
     Parameters
     ----------
@@ -474,6 +493,9 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario") -> Scenari
         E.g. a parsed YAML document.
     where : str
         Names the source (e.g. the file) in error messages.
+    base_dir : path, optional
+        Directory relative plugin files of ``system.plugins`` are taken from (the config
+        file's).
 
     Returns
     -------
@@ -490,7 +512,7 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario") -> Scenari
     try:
         if not isinstance(d, Mapping):
             raise ValueError(f"expected a mapping at the top level, got {d!r}")
-        allowed = ("preset", "env", "models", "targets", *_SCALAR_PARSERS)
+        allowed = ("preset", "env", "models", "targets", "system", *_SCALAR_PARSERS)
         cfg = _p_mapping(d, "<root>", allowed)
         if "preset" not in cfg:
             raise ValueError(f"preset: missing; expected one of {sorted(PRESETS)}")
@@ -507,6 +529,8 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario") -> Scenari
             kw["models"] = _merge_models(base.models, cfg["models"], "models")
         if "targets" in cfg:
             kw["targets"] = _merge_targets(base.targets, cfg["targets"], "targets")
+        if "system" in cfg:
+            kw["system"] = SystemConfig.from_dict(cfg["system"], "system", base_dir)
         return base.with_overrides(**kw)
     except ValueError as exc:
         msg = str(exc).removeprefix("<root>.")

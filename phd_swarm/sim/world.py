@@ -3,7 +3,7 @@
 One time step k of a run (Dames 2020 Sec. II-C and IV; Chen et al. 2021 Alg. 1):
 
 1. the robots are at q^k and the targets at X^k; :meth:`World.scans` gives each live robot
-   its measurement set Z_r^k (:func:`phd_swarm.sim.sensor.simulate_scan`);
+   its measurement set Z_r^k (the scenario's sensor, :mod:`phd_swarm.core.sensors`);
 2. the stack updates its filters and computes each robot's goal g_r (the weighted centroid
    of its cell, Dames eq. 8);
 3. :meth:`World.apply_goals` moves each robot at most ``robot_max_speed * dt`` straight
@@ -30,8 +30,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from phd_swarm.core.lloyd import next_position, step_length
+from phd_swarm.core.registry import lookup
 from phd_swarm.sim.scenario import Scenario
-from phd_swarm.sim.sensor import simulate_scan
 from phd_swarm.sim.targets import Targets, make_targets
 
 #: Order of the child streams spawned from the scenario seed.
@@ -110,7 +110,8 @@ class World:
         """Measurement sets Z_r^k of the live robots at their current positions.
 
         Robots are visited in id order, each drawing from the sensor stream with
-        :func:`~phd_swarm.sim.sensor.simulate_scan` (Dames eq. 9-11 with
+        the ``simulate`` of the scenario's sensor (``disk``:
+        :func:`~phd_swarm.core.sensors.disk.simulate_scan`, Dames eq. 9-11 with
         ``scenario.models``). Dead robots get no entry and consume no random numbers.
 
         Returns
@@ -120,7 +121,8 @@ class World:
         """
         x = self.targets.positions
         models = self.scenario.models
-        return {int(r): simulate_scan(self._sensor_rng, models, self._positions[r], x)
+        simulate = lookup("sensor", self.scenario.system.sensor).extras["simulate"]
+        return {int(r): simulate(self._sensor_rng, models, self._positions[r], x)
                 for r in np.flatnonzero(self._alive)}
 
     def apply_goals(self, goals: Mapping[int, np.ndarray]) -> None:

@@ -29,6 +29,7 @@ from typing import Any
 from rclpy.qos import QoSProfile
 
 from phd_swarm.config import flatten, scenario_to_dict
+from phd_swarm.core import registry
 from phd_swarm.nodes import param_specs, qos, topics
 from phd_swarm.nodes.param_specs import ParamSpec
 from phd_swarm.sim.scenario import PRESETS, TARGET_KINDS
@@ -142,7 +143,12 @@ SCENARIO_MEANINGS: dict[str, str] = {
                             "per-bin threshold is this x resolution^2.",
     "ospa_c": "OSPA cut-off c [m].",
     "ospa_p": "OSPA order p >= 1.",
-    "seed": "Seed of the world's random streams, >= 0.",
+    "seed": "Seed of the world's random streams and the robots' own, >= 0.",
+    "system.sensor": "The system's sensor model (see System parts below).",
+    "system.estimator": "The system's estimator (see System parts below).",
+    "system.exchange": "The system's exchange between robots (see System parts below).",
+    "system.controller": "The system's controller (see System parts below); "
+                         "`run_swarm.sh --controller` sets it.",
 }
 
 #: Parameter tables of docs/parameters.md: (heading, config-file block, specs).
@@ -244,8 +250,9 @@ every node of the run is started with (`--ros-args --params-file FILE`):
       preset: dames_static
       robots: 20
       targets: {{count: 30}}
+      system: {{controller: phd}}   # sensor, estimator, exchange, controller, options
 world:     {{ros__parameters: {{mode: lockstep}}}}
-/**/robot: {{ros__parameters: {{controller: phd}}}}   # every robot, in any namespace
+/**/robot: {{ros__parameters: {{tick_period: 1.0}}}}  # every robot, in any namespace
 monitor:   {{ros__parameters: {{}}}}
 recorder:  {{ros__parameters: {{}}}}
 ```
@@ -278,6 +285,16 @@ Declared by every node as read-only `scenario.<key>`; set in the `/**` block und
 (its target kind does not use it).
 
 {scenario_table}
+
+## System parts
+
+`scenario.system` names one registered part per role (docs/architecture.md) and their
+options, `scenario.system.options.<name>`; a part's options are declared only when it is
+chosen. `scenario.system.plugins` lists modules or `.py` files that register more parts.
+
+{parts_table}
+
+{options_table}
 """
 
 
@@ -427,10 +444,24 @@ def render_parameters() -> str:
                   for flat in defaults.values()]
         rows.append([f"`scenario.{key}`", *values, meaning])
     scenario_table = _table(("parameter", *defaults, "meaning"), rows)
+    parts = [registry.lookup(role, name) for role in registry.ROLES
+             for name in registry.names(role)]
+    parts_table = _table(("role", "name", "options", "provides", "requires", "description"),
+                         [[p.role, f"`{p.name}`",
+                           ", ".join(f"`{o.name}`" for o in p.options) or "-",
+                           ", ".join(sorted(p.provides)) or "-",
+                           ", ".join(sorted(p.requires)) or "-", p.description]
+                          for p in parts])
+    options = {o.name: o for p in parts for o in p.options}
+    options_table = _table(("option", "type", "default", "range", "description"),
+                           [[f"`scenario.system.options.{o.name}`", _ROS_TYPE[type(o.default)],
+                             f"`{_value(o.default)}`", _range(o), o.description]
+                            for o in sorted(options.values(), key=lambda o: o.name)])
     return PARAMETERS_TEMPLATE.format(
-        generated=_GENERATED.format(sources="phd_swarm/nodes/param_specs.py and the "
-                                            "scenario presets"),
-        node_tables="\n\n".join(tables), scenario_table=scenario_table)
+        generated=_GENERATED.format(sources="phd_swarm/nodes/param_specs.py, the scenario "
+                                            "presets and the registry"),
+        node_tables="\n\n".join(tables), scenario_table=scenario_table,
+        parts_table=parts_table, options_table=options_table)
 
 
 # ------------------------------------------------------------------------------ files

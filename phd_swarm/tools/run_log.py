@@ -34,7 +34,7 @@ import yaml
 from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
-from phd_swarm.core.cumulative import cumulative_weight
+from phd_swarm.core.cumulative import cumulative_weight, observe_scans
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.sim.scenario import Scenario
@@ -117,8 +117,8 @@ class RunLog:
 
     @property
     def controller(self) -> str:
-        """The robots' controller kind (``phd``, ``uniform``, ``chen_p``, ``chen_o``)."""
-        return str(self.config.param("robot", "controller"))
+        """The robots' controller (``phd``, ``uniform``, ``chen_p``, ``chen_o``, ...)."""
+        return self.config.scenario.system.controller
 
     def team_images(self, steps: Iterable[int] | None = None
                     ) -> Iterator[tuple[int, np.ndarray, int]]:
@@ -179,11 +179,12 @@ class RunLog:
         each bin of its field of view (Grid.disk_bins of the sensor position and detection
         radius) and one reward if it holds a measurement; the counts are integers, so the
         order of the scans does not matter and the team state is the union of the robots'.
-        ``mode`` defaults to the robots' ``cumulative_mode`` parameter.
+        ``mode`` defaults to the system's ``cumulative_mode`` option (``rate`` if its
+        controller has none).
         """
         grid = self.scenario.grid
         radius = self.scenario.models.detection.radius
-        mode = mode or str(self.config.param("robot", "cumulative_mode"))
+        mode = mode or dict(self.scenario.system.options).get("cumulative_mode", "rate")
         wanted = sorted(set(steps))
         alpha = np.zeros(grid.size)
         count = np.zeros(grid.size, dtype=np.int64)
@@ -191,12 +192,8 @@ class RunLog:
         for k in sorted(self.steps):
             if not wanted or k > wanted[-1]:
                 break
-            for rid in sorted(self.steps[k].scans):
-                sensor, z = self.steps[k].scans[rid]
-                fov = grid.disk_bins(sensor, radius)
-                count[fov] += 1
-                if len(z):
-                    alpha[fov] += 1.0
+            scans = self.steps[k].scans
+            observe_scans(grid, radius, alpha, count, (scans[rid] for rid in sorted(scans)))
             if k in wanted:
                 out[k] = cumulative_weight(alpha, count, mode).reshape(grid.shape)
         return out

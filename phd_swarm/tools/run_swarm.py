@@ -39,7 +39,6 @@ from typing import IO, Any
 
 from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.nodes.completeness import Completeness
-from phd_swarm.nodes.param_specs import ROBOT
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.testing import clean_fastdds_shm, stop_process_group
@@ -68,8 +67,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--targets", type=int, help="number of (initial) targets")
     p.add_argument("--duration", type=float, help="sim time [s]")
     p.add_argument("--seed", type=int, help="random seed")
-    p.add_argument("--controller", choices=next(s for s in ROBOT
-                                                if s.name == "controller").choices)
+    p.add_argument("--controller", help="the system's controller (scenario.system.controller: "
+                   "phd, uniform, chen_p, chen_o or one a plugin registers)")
     p.add_argument("--out", default="runs", help="parent directory of the run (default runs)")
     p.add_argument("--name", help="run name (default <scenario>-<controller>-r<N>-s<seed>)")
     p.add_argument("--realtime", action="store_true", help="fixed-rate steps instead of "
@@ -116,9 +115,11 @@ def resolve(opts: argparse.Namespace) -> RunConfig:
             changes["targets"] = replace(t, count=opts.targets)
     try:
         scenario = s.with_overrides(**changes) if changes else s
+        if opts.controller:
+            scenario = scenario.with_system(controller=opts.controller)
     except ValueError as exc:
         raise ValueError(f"{opts.config}: command-line override: {exc}") from None
-    robot = {"controller": opts.controller} if opts.controller else {}
+    robot: dict[str, Any] = {}
     for option, param in (("drop", "fault_drop"), ("delay", "fault_delay"),
                           ("delay_rounds", "fault_delay_rounds"), ("fault_seed", "fault_seed")):
         if getattr(opts, option) is not None:
@@ -237,7 +238,7 @@ def run(opts: argparse.Namespace) -> int:
     """Run the swarm described by ``opts``; returns the exit code."""
     rc = resolve(opts)
     s = rc.scenario
-    controller = rc.param("robot", "controller")
+    controller = s.system.label()
     name = opts.name or f"{s.name}-{controller}-r{s.robots}-s{s.seed}"
     run_dir = _fresh_dir(Path(opts.out), name)
     record = not opts.no_record
@@ -407,7 +408,8 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
     report = log_completeness(run_dir / "run.mcap") if (run_dir / "run.mcap").exists() \
         else None
     summary["log_completeness"] = None if report is None else report.to_dict()
-    summary.update({"controller": rc.param("robot", "controller"),
+    summary.update({"controller": rc.scenario.system.controller,
+                    "system": rc.scenario.system.to_dict(),
                     "mode": rc.param("world", "mode"), "complete": summary["steps"] == s.steps,
                     "run_dir": str(run_dir), "wall_duration_s": wall,
                     "stepping_wall_s": stepping,

@@ -65,7 +65,6 @@ from phd_swarm.tools.sweep_spec import (
     SpecError,
     SweepSpec,
     Trial,
-    controller_config,
     find_spec,
     load_spec,
 )
@@ -119,7 +118,7 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     sc = trial.scenario
-    engine = make_engine(trial.engine, sc, controller_config(trial.controller, sc))
+    engine = make_engine(trial.engine, sc)
     n = sc.steps
     s = {name: np.zeros(n) for name in SERIES}
     for k in range(n):
@@ -153,21 +152,21 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     return row, s
 
 
-def make_engine(name: str, scenario, controller):
+def make_engine(name: str, scenario):
     """The engine ``name`` (:data:`~phd_swarm.tools.sweep_spec.ENGINES`) for one trial."""
     if name == "central":
         from phd_swarm.sim.central_engine import CentralEngine
-        return CentralEngine(scenario, controller)
+        return CentralEngine(scenario)
     if name == "distributed":
         from phd_swarm.sim.engine import InMemoryEngine
-        return InMemoryEngine(scenario, controller)
+        return InMemoryEngine(scenario)
     raise ValueError(f"unknown engine {name!r}")
 
 
 def protocol_counters(engine) -> dict[str, int]:
     """:data:`PROTOCOL_COLUMNS` summed over the robots (all 0 without a protocol)."""
-    robots = getattr(engine, "robots", {})
-    return {c: sum(r.stats.get(c, 0) for r in robots.values()) for c in PROTOCOL_COLUMNS}
+    counts = engine.counters()
+    return {c: counts.get(c, 0) for c in PROTOCOL_COLUMNS}
 
 
 class _Collect(logging.Handler):

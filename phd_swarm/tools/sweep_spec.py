@@ -6,7 +6,7 @@ preset of :mod:`phd_swarm.sim.scenario`::
 
     preset: dames_static          # dames_static | dames_moving | chen_clustered
     figure: Dames (2020) Fig. 2   # title of the plots
-    methods: {PHD: phd, uniform: uniform}   # label -> controller kind
+    methods: {PHD: phd, uniform: uniform}   # label -> controller, or a system block
     robots: [10, 20, 30]          # team sizes
     targets: [10, 30, 50]         # optional: target counts (default: the preset's)
     resolutions: [1.0]            # optional: grid resolutions [m] (default: the preset's)
@@ -43,9 +43,8 @@ from pathlib import Path
 from typing import Any
 
 from phd_swarm.config import read_yaml
-from phd_swarm.core.controller import KINDS as CONTROLLER_KINDS
-from phd_swarm.core.controller import ControllerConfig
-from phd_swarm.core.cumulative import MODES as CUMULATIVE_MODES
+from phd_swarm.core.registry import ROLES
+from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 
 #: Ways to reduce a trial's per-step OSPA series to one number.
@@ -70,9 +69,6 @@ AXIS_FIELDS = ("preset", "robots", "seed", "resolution", "duration")
 
 _LABEL = re.compile(r"^[A-Za-z0-9_]+$")
 
-#: Controller options a method may set (``{kind: chen_o, cumulative_mode: laplace}``), with
-#: their allowed values.
-CONTROLLER_OPTIONS: dict[str, tuple[str, ...]] = {"cumulative_mode": CUMULATIVE_MODES}
 
 
 class SpecError(ValueError):
@@ -88,8 +84,8 @@ class Trial:
     method : str
         The spec's label of the method (e.g. ``PHD``, ``D``).
     controller : str
-        Controller kind (:data:`phd_swarm.core.controller.KINDS`), with its options if any
-        (:func:`controller_name`).
+        The method's system as text (:func:`controller_name`): the controller, with the
+        options and non-default parts the method sets, if any.
     robots, targets : int
         Team size and number of targets drawn (static) or initial (moving) or in total
         (clustered).
@@ -221,7 +217,8 @@ class SweepSpec:
     def base_scenario(self) -> Scenario:
         """The preset with the ``scenario:`` overrides and the duration applied."""
         return scenario_from_dict({"preset": self.preset, **self.scenario,
-                                   "duration": self.duration}, where=str(self.path))
+                                   "duration": self.duration}, where=str(self.path),
+                                  base_dir=self.path.parent)
 
     def trials_list(self) -> list[Trial]:
         """Every trial of the sweep, in a fixed order (seed, robots, targets, res, method)."""
@@ -235,9 +232,10 @@ class SweepSpec:
                         sc = base.with_overrides(robots=robots, resolution=res, seed=seed,
                                                  targets=_with_count(base, targets).targets)
                         for label, kind in self.methods.items():
-                            out.append(Trial(label, kind, robots, targets, res, i, seed, sc,
+                            msc = sc.with_system(**method_system(kind))
+                            out.append(Trial(label, kind, robots, targets, res, i, seed, msc,
                                              self.metric, self.window,
-                                             config_hash(sc, kind, self.metric,
+                                             config_hash(msc, kind, self.metric,
                                                          self.window, self.engine),
                                              self.engine))
         return out
@@ -256,9 +254,19 @@ class SweepSpec:
 
 def config_hash(scenario: Scenario, controller: str, metric: str,
                 window: tuple[float, float], engine: str = "central") -> str:
-    """16 hex digits of SHA-256 over the scenario's fields, controller, metric and engine."""
-    doc = {"scenario": _plain(dataclasses.asdict(scenario)), "controller": controller,
+    """16 hex digits of SHA-256 over the scenario's fields, controller, metric and engine.
+
+    The scenario's system enters through the method text ``controller``; the system itself
+    is hashed only where it differs from what that text says (other parts, options or
+    plugins set under ``scenario:``), so the hashes of results from before the system
+    block existed stay valid.
+    """
+    fields = dataclasses.asdict(scenario)
+    fields.pop("system")
+    doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
+    if scenario.system != SystemConfig().with_parts(**method_system(controller)):
+        doc["system"] = _plain(scenario.system.to_dict())
     text = json.dumps(doc, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -363,51 +371,89 @@ def _mapping(where: str, key: str, value: Any, allowed: Sequence[str] | None) ->
 
 
 def _methods(where: str, key: str, value: Any) -> dict[str, str]:
+    """Label -> method text (:func:`controller_name`), each checked against the registry.
+
+    A method is a controller name (``phd``) or a system block (``{controller: chen_o,
+    options: {cumulative_mode: laplace}}``, :mod:`phd_swarm.core.system`); the older form
+    ``{kind: chen_o, cumulative_mode: laplace}`` is read as the same.
+    """
     m = _mapping(where, key, value, None)
     if not m:
-        raise _fail(where, key, "expected at least one method (label: controller kind)")
+        raise _fail(where, key, "expected at least one method (label: controller)")
     out = {}
-    for label, kind in m.items():
+    for label, method in m.items():
         name = f"{key}.{label}"
         if not isinstance(label, str) or not _LABEL.match(label):
             raise _fail(where, name, "a method label must be letters, digits and underscores")
-        options: dict[str, str] = {}
-        if isinstance(kind, Mapping):
-            opts = dict(_mapping(where, name, kind, ("kind", *CONTROLLER_OPTIONS)))
-            if "kind" not in opts:
-                raise _fail(where, f"{name}.kind", "missing; expected a controller kind")
-            kind = opts.pop("kind")
-            for opt, v in opts.items():
-                if v not in CONTROLLER_OPTIONS[opt]:
-                    raise _fail(where, f"{name}.{opt}", f"{v!r} is not one of "
-                                                        f"{list(CONTROLLER_OPTIONS[opt])}")
-                options[opt] = v
-        if kind not in CONTROLLER_KINDS:
-            raise _fail(where, name, f"unknown controller {kind!r}; expected one "
-                                     f"of {list(CONTROLLER_KINDS)}")
-        out[label] = controller_name(kind, options)
+        legacy = isinstance(method, Mapping) and "kind" in method
+        if isinstance(method, str):
+            block: dict[str, Any] = {"controller": method}
+        elif isinstance(method, Mapping) and "kind" in method:
+            opts = dict(method)
+            block = {"controller": opts.pop("kind"), "options": opts}
+        elif isinstance(method, Mapping):
+            block = dict(method)
+            if "plugins" in block:
+                raise _fail(where, f"{name}.plugins", "list plugins once, under "
+                                                      "scenario.system.plugins")
+            if "controller" not in block:
+                raise _fail(where, f"{name}.controller", "missing; expected a controller")
+        else:
+            raise _fail(where, name, f"expected a controller or a system block, got "
+                                     f"{method!r}")
+        try:
+            system = SystemConfig.from_dict(block, "system")
+        except ValueError as exc:
+            sub, _, msg = str(exc).removeprefix("system.").partition(": ")
+            if legacy:
+                sub = sub.removeprefix("options.").replace("controller", "kind")
+            if isinstance(method, str) and sub == "controller":
+                raise _fail(where, name, msg) from None
+            raise _fail(where, f"{name}.{sub}", msg) from None
+        parts = {r: block[r] for r in ROLES if r in block and r != "controller"}
+        out[label] = controller_name(system.controller,
+                                     {**parts, **dict(block.get("options") or {})})
     return out
 
 
-def controller_name(kind: str, options: Mapping[str, str] | None = None) -> str:
-    """Canonical text of a controller with options: ``kind`` or ``kind(key=value,...)``.
+def controller_name(kind: str, options: Mapping[str, Any] | None = None) -> str:
+    """Canonical text of a method: ``controller`` or ``controller(key=value,...)``.
 
-    This is the ``controller`` column of results.csv and what the config hash covers; a
-    controller without options hashes as its kind alone.
+    The keys are the options the method sets and the parts other than the controller
+    (``estimator=...``) it names. This is the ``controller`` column of results.csv and
+    what the config hash covers; a method without options hashes as its controller alone.
     """
     if not options:
         return kind
     return f"{kind}({','.join(f'{k}={options[k]}' for k in sorted(options))})"
 
 
-def controller_config(controller: str, scenario: Scenario) -> ControllerConfig:
-    """The :class:`ControllerConfig` of a canonical controller text (:func:`controller_name`).
+def method_system(controller: str) -> dict[str, Any]:
+    """The ``Scenario.with_system`` changes of a method text (:func:`controller_name`).
 
-    ``rho_max`` is the scenario's sensing radius, as the engine uses for a bare kind.
+    Values come back as text, so options are converted by their specs (``SystemConfig``
+    checks them); ``rho_max=2.5`` becomes 2.5.
     """
     kind, _, rest = controller.partition("(")
-    options = dict(item.split("=", 1) for item in rest.rstrip(")").split(",")) if rest else {}
-    return ControllerConfig(kind=kind, rho_max=scenario.models.detection.radius, **options)
+    items = dict(item.split("=", 1) for item in rest.rstrip(")").split(",")) if rest else {}
+    changes: dict[str, Any] = {"controller": kind}
+    options: dict[str, Any] = {}
+    for k, v in items.items():
+        if k in ROLES:
+            changes[k] = v
+        else:
+            options[k] = _option_value(v)
+    changes["options"] = options
+    return changes
+
+
+def _option_value(text: str) -> Any:
+    for convert in (int, float):
+        try:
+            return convert(text)
+        except ValueError:
+            pass
+    return {"True": True, "False": False}.get(text, text)
 
 
 def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
@@ -494,6 +540,7 @@ def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) 
     name = _str(where, "name", doc.get("name", path.stem))
     if not _LABEL.match(name):
         raise _fail(where, "name", "must be letters, digits and underscores")
+    _load_spec_plugins(where, doc, path.parent)
     full = _form(where, doc, "")
     for key in ("methods", "robots", "trials"):
         if key not in full:
@@ -520,6 +567,18 @@ def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) 
     return _resolve(where, name, path, quick, preset, form, qkeys)
 
 
+def _load_spec_plugins(where: str, doc: Mapping[str, Any], base: Path) -> None:
+    """Import ``scenario.system.plugins`` first, so that methods may name their parts."""
+    scen = doc.get("scenario")
+    system = scen.get("system") if isinstance(scen, Mapping) else None
+    if not isinstance(system, Mapping) or "plugins" not in system:
+        return
+    try:
+        SystemConfig.from_dict({"plugins": system["plugins"]}, "scenario.system", base)
+    except ValueError as exc:
+        raise SpecError(f"{where}: {exc}") from None
+
+
 def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
              form: dict[str, Any], qkeys: set[str]) -> SweepSpec:
     def key(k: str) -> str:
@@ -528,7 +587,8 @@ def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
     base_sc = PRESETS[preset]()
     scen = form.get("scenario", {})
     try:
-        base = scenario_from_dict({"preset": preset, **scen}, where="scenario")
+        base = scenario_from_dict({"preset": preset, **scen}, where="scenario",
+                                  base_dir=path.parent)
     except ValueError as exc:
         raise SpecError(f"{where}: {exc}") from None
     duration = form.get("duration", base.duration)

@@ -51,8 +51,10 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
         parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
                                        to_id=1, step=k, kind=0, radius_ids=[2],
                                        cell_radii=[-1.0]))          # negative cell radius
+        parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
+                                       to_id=2, step=k, kind=0))    # for another robot
         assert ros.spin_until(lambda: monitor.done, timeout=120.0)
-        assert dict(victim.rejections) == {"state": 4, "measurements": 1, "particles": 2}
+        assert dict(victim.rejections) == {"state": 4, "measurements": 1, "particles": 3}
         assert world.dead == set()
         assert len(monitor.series) == scenario.steps
 

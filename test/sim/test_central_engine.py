@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import phd_grid
-from phd_swarm.core.controller import ControllerConfig
 from phd_swarm.core.partition import cells, points_in_polygon
 from phd_swarm.sim import scenario as sc
 from phd_swarm.sim.central_engine import CentralEngine
@@ -15,27 +14,29 @@ from phd_swarm.sim.engine import InMemoryEngine
 STEPS = 120
 
 
-def _chen_o(mode: str) -> ControllerConfig:
-    return ControllerConfig(kind="chen_o", rho_max=5.0, cumulative_mode=mode)
+def _chen_o(mode: str) -> sc.Scenario:
+    return sc.chen_clustered(robots=20, resolution=1.0).with_system(
+        controller="chen_o", options={"rho_max": 5.0, "cumulative_mode": mode})
 
 
 CASES = {
-    "dames_static_phd": (sc.dames_static(robots=20, targets=30), "phd"),
-    "dames_static_uniform": (sc.dames_static(robots=20, targets=30), "uniform"),
-    "dames_moving_phd": (sc.dames_moving(robots=15, targets=20), "phd"),
-    "chen_p": (sc.chen_clustered(robots=20, resolution=1.0), "chen_p"),
-    "chen_o": (sc.chen_clustered(robots=20, resolution=1.0), _chen_o("rate")),
-    "chen_o_laplace": (sc.chen_clustered(robots=20, resolution=1.0), _chen_o("laplace")),
+    "dames_static_phd": sc.dames_static(robots=20, targets=30),
+    "dames_static_uniform": sc.dames_static(robots=20, targets=30).with_system(
+        controller="uniform"),
+    "dames_moving_phd": sc.dames_moving(robots=15, targets=20),
+    "chen_p": sc.chen_clustered(robots=20, resolution=1.0).with_system(controller="chen_p"),
+    "chen_o": _chen_o("rate"),
+    "chen_o_laplace": _chen_o("laplace"),
 }
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_central_engine_follows_the_distributed_one(name):
-    scenario, controller = CASES[name]
-    scenario = scenario.with_overrides(seed=4)
-    dist = InMemoryEngine(scenario, controller)
-    cent = CentralEngine(scenario, controller)
+    scenario = CASES[name].with_overrides(seed=4)
+    controller = scenario.system.controller
+    dist = InMemoryEngine(scenario)
+    cent = CentralEngine(scenario)
     moved = 0.0
     for k in range(STEPS):
         before = cent.world.robot_positions.copy()
@@ -58,7 +59,7 @@ def test_central_engine_follows_the_distributed_one(name):
                                                             rel=1e-9, abs=1e-12)
         moved += float(np.abs(cent.world.robot_positions - before).max())
     assert moved > 10.0, "the team moved: the comparison covers the controllers"
-    if isinstance(controller, ControllerConfig) or controller == "chen_p":
+    if controller in ("chen_p", "chen_o"):
         assert np.any(cent.power_weights > 0), "power cells were exercised"
 
 

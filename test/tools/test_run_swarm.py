@@ -221,8 +221,9 @@ def _fast_timeouts(tmp_path: Path) -> Path:
     config = tmp_path / "fast_timeouts.yaml"
     config.write_text(Path(CONFIG).read_text().replace(
         "    step_timeout: 15.0", "    step_timeout: 3.0").replace(
-        "    controller: phd", "    controller: phd\n    tick_period: 0.2\n"
-        "    timeout_ticks: 5").replace("progress_every: 20", "progress_every: 2"))
+        "    tick_period: 1.0 ", "    timeout_ticks: 5\n    tick_period: 0.2 ").replace(
+        "progress_every: 20", "progress_every: 2"))
+    assert "tick_period: 0.2" in config.read_text()
     return config
 
 
@@ -341,3 +342,23 @@ def test_bad_fault_options_are_refused_before_anything_starts(tmp_path):
                          env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
     assert res.returncode == 2 and "fault_drop" in res.stderr and "<= 1.0" in res.stderr
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_a_controller_registered_by_a_plugin_runs_through_run_swarm(tmp_path, children):
+    # examples/stationary_controller.py registers "stationary" from outside the package;
+    # the config names it and lists the file (relative to the config) as a plugin.
+    config = str(ROOT / "examples" / "stationary.yaml")
+    out = _finish(children, _start(children, tmp_path, "s", config=config))
+    assert "controller stationary" in out
+    run = tmp_path / "s"
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["controller"] == "stationary" and summary["steps"] == STEPS
+    plugin = summary["system"]["plugins"][0]
+    assert Path(plugin).is_absolute() and plugin.endswith("examples/stationary_controller.py")
+    teams = [r.msg for r in read_messages(run / "run.mcap", topics=["/world/robots"])]
+    assert len(teams) == STEPS + 1
+    first = [(p.x, p.y) for p in teams[0].positions]
+    for team in teams[1:]:
+        assert [(p.x, p.y) for p in team.positions] == first, "a stationary team stays put"

@@ -21,7 +21,9 @@ def _config(tmp_path: Path) -> Path:
     text = (ROOT / "config" / "dames_static.yaml").read_text()
     text = text.replace("robots: 20 ", "robots: 2 ").replace("duration: 250.0", "duration: 4.0")
     text = text.replace("    step_timeout: 15.0", "    step_timeout: 15.0\n    observers: 1")
-    text = text.replace("    controller: phd", "    controller: uniform\n    observers: 1")
+    text = text.replace("        controller: phd ", "        controller: uniform ")
+    text = text.replace("    tick_period: 1.0 ", "    observers: 1\n    tick_period: 1.0 ")
+    assert text.count("uniform") == 1 and text.count("observers: 1") == 2
     path = tmp_path / "two_robots.yaml"
     path.write_text(text)
     return path

@@ -232,7 +232,7 @@ def test_progress_bar_on_a_tty_and_lines_otherwise():
 
 def test_a_failing_trial_is_reported_not_raised():
     trial = load_spec(find_spec("dames_static"), quick=True).trials_list()[0]
-    _, row, series, error, _ = sweep._work(dataclasses.replace(trial, controller="bogus"))
+    _, row, series, error, _ = sweep._work(dataclasses.replace(trial, engine="bogus"))
     assert row is None and series is None
     assert error.startswith("ValueError") and "bogus" in error
 
@@ -310,9 +310,13 @@ BAD = [
     ("methods: {PHD: lloyd}\n", "methods.PHD: unknown controller 'lloyd'"),
     ("methods: {}\n", "methods: expected at least one method"),
     ("methods: {O: {kind: chen_o, cumulative_mode: fancy}}\n",
-     "methods.O.cumulative_mode: 'fancy' is not one of"),
-    ("methods: {O: {cumulative_mode: rate}}\n", "methods.O.kind: missing"),
-    ("methods: {O: {kind: chen_o, rho: 3}}\n", "methods.O.rho: unknown key"),
+     "methods.O.cumulative_mode: must be one of ['rate', 'literal', 'laplace'], got 'fancy'"),
+    ("methods: {O: {cumulative_mode: rate}}\n", "methods.O.controller: missing"),
+    ("methods: {O: {kind: chen_o, rho: 3}}\n", "methods.O.rho: unknown option"),
+    ("methods: {O: {controller: chen_o, options: {rho_max: -1}}}\n",
+     "methods.O.options.rho_max: must be >= 0.0, got -1"),
+    ("methods: {O: {controller: chen_o, estimator: gm}}\n",
+     "methods.O.estimator: unknown estimator 'gm'"),
     ("metric: max\n", "metric: expected one of"),
     ("window: [20, 30]\n", "window: [20, 30] s holds no step"),
     ("resolutions: [0.7]\n", "resolutions[0]:"),
@@ -354,12 +358,10 @@ def test_a_method_with_controller_options_runs_with_them(tmp_path):
     assert spec.methods == {"O": "chen_o", "OL": "chen_o(cumulative_mode=laplace)"}
     o, ol = spec.trials_list()
     assert o.config_hash != ol.config_hash
-    from phd_swarm.tools.sweep_spec import controller_config
-
-    config = controller_config(ol.controller, ol.scenario)
-    assert (config.kind, config.cumulative_mode) == ("chen_o", "laplace")
-    assert config.rho_max == ol.scenario.models.detection.radius
-    assert controller_config(o.controller, o.scenario).cumulative_mode == "rate"
+    assert ol.scenario.system.controller == "chen_o"
+    assert ol.scenario.system.option("cumulative_mode") == "laplace"
+    assert ol.scenario.system.option("rho_max") == 0.0  # the sensing radius
+    assert o.scenario.system.option("cumulative_mode") == "rate"
     row, series = sweep.run_trial(ol)
     assert row["controller"] == "chen_o(cumulative_mode=laplace)" and len(series["t"]) == 15
     assert all(row[c] == 0 for c in sweep.PROTOCOL_COLUMNS)
@@ -439,3 +441,21 @@ def test_committed_results_belong_to_their_specs(folder):
         series = sweep.load_series(out / "series" / f"{trial.key}.npz")
         assert str(series["config_hash"]) == trial.config_hash
         assert len(series["ospa"]) == trial.scenario.steps
+
+
+def test_a_controller_registered_by_a_plugin_runs_in_a_sweep(tmp_path):
+    # The spec lists examples/stationary_controller.py (relative to the spec) as a plugin
+    # and names its controller as a method; the sweep runner is not told about it.
+    spec_path = ROOT / "examples" / "stationary_sweep.yaml"
+    assert sweep.main([str(spec_path), "--quick", "--workers", "1", "--out",
+                       str(tmp_path)]) == 0
+    rows = {r["method"]: r for r in csv.DictReader(open(tmp_path / "results.csv"))}
+    assert rows["stationary"]["controller"] == "stationary"
+    trial = next(t for t in load_spec(spec_path, quick=True).trials_list()
+                 if t.method == "stationary")
+    engine = sweep.make_engine(trial.engine, trial.scenario)
+    start = engine.world.robot_positions.copy()
+    engine.run()
+    assert np.array_equal(engine.world.robot_positions, start), "a stationary team stays put"
+    row, _ = sweep.run_trial(trial)
+    assert float(rows["stationary"]["ospa_final"]) == row["ospa_final"]

@@ -1,4 +1,9 @@
-"""The simulated sensor: ground truth to a noisy measurement set with misses and clutter.
+"""The disk sensor (Dames 2020 Sec. II-B): a field-of-view disk, position measurements.
+
+Registered as the ``disk`` sensor (:mod:`phd_swarm.core.registry`); the world simulates scans
+with it and the grid PHD filters them with the same models (``scenario.models``).
+
+Simulation: ground truth to a noisy measurement set with misses and clutter.
 
 It draws from the same models the filter assumes (Dames eq. 9-11): each target in the field
 of view is detected with probability p_d and measured as z ~ N(x, variance I); clutter is a
@@ -10,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from phd_swarm.core.models import PhdModels
+from .. import registry
+from ..models import PhdModels
 
 
 def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarray,
@@ -47,3 +53,14 @@ def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarra
     a = 2.0 * np.pi * u[:, 1]
     clutter = sensor + np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
     return np.concatenate([hits, clutter], axis=0)
+
+
+def _setup(scenario, system, **runtime) -> PhdModels:
+    return scenario.models
+
+
+registry.register(
+    "sensor", "disk", lambda models, rid: models, setup=_setup,
+    description="Disk field of view, p_d inside, position measurements with Gaussian noise, "
+                "Poisson clutter uniform in the disk (Dames 2020 eq. 9-11).",
+    provides=("disk_fov", "position_measurement"), simulate=simulate_scan)

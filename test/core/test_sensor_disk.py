@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 
 from phd_swarm.core.models import DiskDetection, PhdModels, UniformClutter
-from phd_swarm.sim.sensor import simulate_scan
+from phd_swarm.core.sensors.disk import simulate_scan
 
 
 def test_scan_is_reproducible_from_the_seed():

@@ -1,0 +1,176 @@
+"""The one agent step: scan -> exchange -> estimator -> controller, for every system.
+
+An :class:`Agent` is one robot of a system (:class:`phd_swarm.core.system.SystemConfig`): its
+exchange participant, estimator and controller, made from the registry
+(:mod:`phd_swarm.core.registry`) with the team's shared set-up (:class:`Team`), and its own
+seeded generator. The in-memory engine (:mod:`phd_swarm.sim.engine`) and the ROS robot node
+(:mod:`phd_swarm.nodes.robot`) drive robots only through it, so the proofs that the two give
+the same run cover every system. One step k:
+
+1. :meth:`Agent.observe_team` (or :meth:`Agent.rejoin`): the world's membership at step k;
+2. :meth:`Agent.start_step` with the robot's position q^k and its measurement set Z^k:
+   the exchange starts the step and returns the first messages to send;
+3. :meth:`Agent.receive` + :meth:`Agent.advance` for every message that arrives, and
+   :meth:`Agent.tick` for every round (tick period) without progress, until
+   :attr:`Agent.done`; each returns the messages to send (addressed envelopes);
+4. :meth:`Agent.finish_step`: the controller decides the goal (and the power weight the
+   exchange sends with the robot's state at the next step) from what the estimator and the
+   exchange know (:class:`~phd_swarm.core.controllers.base.Knowledge`).
+
+Randomness: robot r's controller draws from ``robot_generator(seed, r)``, a stream of its
+own (the world's streams are the first three children of the scenario seed,
+:mod:`phd_swarm.sim.world`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .controllers.base import Decision, Knowledge
+from .registry import ROLES, Part
+
+#: Child of the scenario's SeedSequence whose children are the robots' own streams.
+ROBOT_STREAMS = 3
+
+
+def robot_generator(seed: int, robot_id: int) -> np.random.Generator:
+    """Robot ``robot_id``'s generator: child ``robot_id`` of child 3 of the scenario seed."""
+    return np.random.default_rng(np.random.SeedSequence(seed,
+                                                        spawn_key=(ROBOT_STREAMS, robot_id)))
+
+
+@dataclass(frozen=True, eq=False)
+class Team:
+    """What the robots of one team share: the parts and their set-up, made once.
+
+    Build it with :meth:`build`. Robots in one process share one team (and its caches);
+    a robot in a process of its own builds the same.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The run's settings (``scenario.system`` names the parts).
+    parts : dict of str to Part
+        Role -> registered part.
+    setups : dict of str to object
+        Role -> what the part's ``setup`` returned.
+    """
+
+    scenario: Any
+    parts: dict[str, Part]
+    setups: dict[str, Any]
+
+    @classmethod
+    def build(cls, scenario: Any, **runtime: Any) -> Team:
+        """Set up the parts of ``scenario.system``.
+
+        ``runtime`` goes to every part's ``setup`` (e.g. ``timeout_ticks`` of the exchange).
+        """
+        system = scenario.system
+        parts = system.parts()
+        setups = {role: parts[role].setup(scenario, system, **runtime) for role in ROLES}
+        return cls(scenario, parts, setups)
+
+    def make(self, role: str, robot_id: int) -> Any:
+        """Robot ``robot_id``'s instance of ``role``."""
+        return self.parts[role].make(self.setups[role], robot_id)
+
+    def agent(self, robot_id: int) -> Agent:
+        """A new agent for robot ``robot_id`` (a fresh start, e.g. a restarted process)."""
+        return Agent(robot_id, self)
+
+
+class Agent:
+    """One robot of a system: exchange, estimator, controller and its generator.
+
+    Parameters
+    ----------
+    robot_id : int
+        The robot's id in the team.
+    team : Team
+        The team's parts and set-up.
+
+    Attributes
+    ----------
+    exchange : object
+        The exchange participant (for ``voronoi_phd`` a
+        :class:`~phd_swarm.core.protocol.robot.RobotFilter`).
+    estimator, controller : object
+        The robot's estimator and controller (:class:`~phd_swarm.core.controllers.base.
+        Controller`).
+    power_weight : float
+        The weight the robot's state carries at the next step (the last decision's).
+    position, z : np.ndarray
+        The robot's position and measurement set at the current step.
+    """
+
+    def __init__(self, robot_id: int, team: Team) -> None:
+        self.robot_id = int(robot_id)
+        self.team = team
+        self.exchange = team.make("exchange", robot_id)
+        self.estimator = team.make("estimator", robot_id)
+        self.controller = team.make("controller", robot_id)
+        self.rng = robot_generator(team.scenario.seed, robot_id)
+        self._view = team.parts["exchange"].extras["view"]
+        self.power_weight = 0.0
+        self.position = np.zeros(2)
+        self.z = np.empty((0, 2))
+
+    # ---------------------------------------------------------------- membership
+    def initialise(self, ids: np.ndarray, positions: np.ndarray) -> None:
+        """The team's configuration at the start (every robot gets the same)."""
+        self.exchange.initialise(ids, positions)
+
+    def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
+                     alive: np.ndarray) -> None:
+        """The world's membership at the start of ``step`` (who died, who came back)."""
+        self.exchange.observe_team(step, ids, positions, alive)
+
+    def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
+               alive: np.ndarray) -> None:
+        """Come back into the team at ``step`` (after being counted dead).
+
+        The power weight starts from 0 again.
+        """
+        self.exchange.rejoin(step, ids, positions, alive)
+        self.power_weight = 0.0
+
+    # --------------------------------------------------------------------- step
+    def start_step(self, step: int, position: np.ndarray, z: np.ndarray) -> list:
+        """Start ``step`` at ``position`` with measurement set ``z``; messages to send."""
+        self.position = np.asarray(position, dtype=float)
+        self.z = np.asarray(z, dtype=float).reshape(-1, 2)
+        return self.exchange.start_step(step, self.position, self.power_weight, self.z)
+
+    def receive(self, msg: Any) -> bool:
+        """Take one message in; True if it is news (not a repeat or a keep-alive)."""
+        return self.exchange.receive(msg)
+
+    def advance(self) -> list:
+        """Go as far as the messages received allow; messages to send."""
+        return self.exchange.advance()
+
+    def tick(self) -> list:
+        """One round (tick period) without progress: keep-alives and timeouts."""
+        return self.exchange.tick()
+
+    @property
+    def done(self) -> bool:
+        """Whether the exchange has finished the current step."""
+        return self.exchange.done
+
+    @property
+    def step(self) -> int:
+        """The current (or last) step of the exchange."""
+        return self.exchange.step
+
+    def finish_step(self) -> Decision:
+        """The controller's decision at the end of the step (call once :attr:`done`)."""
+        knowledge = Knowledge(self.robot_id, self.exchange.step, self.position, self.z,
+                              self._view(self.exchange))
+        decision = self.controller.decide(knowledge, self.rng)
+        self.power_weight = decision.power_weight
+        return decision

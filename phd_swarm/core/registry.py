@@ -1,0 +1,190 @@
+"""Names -> system parts: the one table the robot node, the engines and the sweeps read.
+
+A system (one paper's algorithm) is a choice of four roles, named in the scenario config
+(``scenario.system``, :class:`phd_swarm.core.system.SystemConfig`):
+
+- **sensor**: field-of-view shape, detection, measurement and clutter models, shared by
+  the world (to simulate scans) and the estimators (to filter them);
+- **estimator**: the robot's belief about the targets (predict, update with a scan taken
+  from a sensor pose, estimates);
+- **exchange**: the transport-agnostic state machine of what robots tell each other
+  (messages in, addressed messages out, ticks for time);
+- **controller**: decides the robot's next goal from what it knows; it may keep state and
+  gets the robot's seeded generator.
+
+Each part is registered under a name with :func:`register`, from the module that implements
+it, together with the options it takes (:class:`~phd_swarm.core.params.ParamSpec`, so every
+option is validated and documented like a node parameter) and what it provides to and
+requires of the other parts (e.g. the Lloyd controllers need a grid density over a cell).
+The built-in parts register when this module first looks a name up; other modules register
+theirs when imported, which a scenario asks for with ``system.plugins`` (module names or
+``.py`` files, :func:`load_plugins`). Adding a system is writing its parts and registering
+them: the robot node, the engines and the sweep runner look them up here.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .params import ParamSpec
+
+#: The roles a system is made of, in the order of a step (docs/architecture.md).
+ROLES = ("sensor", "estimator", "exchange", "controller")
+
+#: Modules that register the built-in parts, imported on the first lookup.
+BUILTIN_MODULES = ("phd_swarm.core.sensors", "phd_swarm.core.estimators",
+                   "phd_swarm.core.exchange", "phd_swarm.core.controllers")
+
+
+class RegistryError(ValueError):
+    """An unknown part, a name registered twice, or a plugin that cannot be loaded."""
+
+
+@dataclass(frozen=True)
+class Part:
+    """One registered implementation of a role.
+
+    Attributes
+    ----------
+    role : str
+        One of :data:`ROLES`.
+    name : str
+        The name a scenario config uses (``phd``, ``voronoi_phd``...).
+    make : callable
+        ``make(setup, robot_id)`` -> the robot's instance of the part; ``setup`` is what
+        :attr:`setup` returned.
+    setup : callable
+        ``setup(scenario, system, **runtime)`` -> what every robot's instance shares
+        (models, caches, resolved options), computed once per team; ``system`` is the
+        :class:`~phd_swarm.core.system.SystemConfig` (names and options), ``runtime`` the
+        transport's settings (e.g. ``timeout_ticks``), which a part may ignore.
+    description : str
+        One line for the docs (docs/architecture.md, docs/parameters.md).
+    options : tuple of ParamSpec
+        The options the part takes (``scenario.system.options.<name>``).
+    provides, requires : frozenset of str
+        Capabilities the part gives the others (e.g. ``grid_density``, ``cell``) and those
+        it needs from the estimator and the exchange of the same system.
+    extras : dict
+        Role-specific hooks (e.g. ``view`` of an exchange, ``central`` of an estimator).
+    """
+
+    role: str
+    name: str
+    make: Callable[[Any, int], Any]
+    setup: Callable[..., Any]
+    description: str
+    options: tuple[ParamSpec, ...] = ()
+    provides: frozenset[str] = frozenset()
+    requires: frozenset[str] = frozenset()
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+_PARTS: dict[str, dict[str, Part]] = {role: {} for role in ROLES}
+_builtins_loaded = False
+
+
+def _no_setup(scenario: Any, system: Any, **runtime: Any) -> None:
+    return None
+
+
+def register(role: str, name: str, make: Callable[[Any, int], Any], *, description: str,
+             setup: Callable[..., Any] = _no_setup,
+             options: Iterable[ParamSpec] = (), provides: Iterable[str] = (),
+             requires: Iterable[str] = (), **extras: Any) -> Part:
+    """Register a part under ``name`` for ``role``; returns it.
+
+    Raises
+    ------
+    RegistryError
+        For an unknown role, a name that is not a lower-case identifier, or a name already
+        registered for the role by another module.
+    """
+    if role not in ROLES:
+        raise RegistryError(f"unknown role {role!r}; expected one of {list(ROLES)}")
+    if not name.isidentifier() or name.lower() != name:
+        raise RegistryError(f"{role} name must be a lower-case identifier, got {name!r}")
+    part = Part(role, name, make, setup, description, tuple(options), frozenset(provides),
+                frozenset(requires), dict(extras))
+    old = _PARTS[role].get(name)
+    if old is not None and old.make.__module__ != make.__module__:
+        raise RegistryError(f"{role} {name!r} is already registered by {old.make.__module__}")
+    _PARTS[role][name] = part
+    return part
+
+
+def _load_builtins() -> None:
+    global _builtins_loaded
+    if not _builtins_loaded:
+        _builtins_loaded = True
+        for module in BUILTIN_MODULES:
+            importlib.import_module(module)
+
+
+def lookup(role: str, name: str) -> Part:
+    """The part registered as ``name`` for ``role``.
+
+    Raises
+    ------
+    RegistryError
+        If there is none; the message lists the names there are.
+    """
+    _load_builtins()
+    if role not in ROLES:
+        raise RegistryError(f"unknown role {role!r}; expected one of {list(ROLES)}")
+    try:
+        return _PARTS[role][name]
+    except KeyError:
+        raise RegistryError(f"unknown {role} {name!r}; expected one of {names(role)} (or "
+                            f"register it from a plugin: system.plugins)") from None
+
+
+def names(role: str) -> list[str]:
+    """Sorted names registered for ``role``."""
+    _load_builtins()
+    return sorted(_PARTS[role])
+
+
+def load_plugins(plugins: Iterable[str]) -> None:
+    """Import the modules that register parts: module names, or paths of ``.py`` files.
+
+    A file is imported once under a module name derived from its absolute path, so that
+    two processes importing the same file register the same names.
+
+    Raises
+    ------
+    RegistryError
+        If a module cannot be found or raises while importing; the message names it.
+    """
+    _load_builtins()
+    for plugin in plugins:
+        try:
+            if plugin.endswith(".py") or "/" in plugin:
+                path = Path(plugin).resolve()
+                module_name = "phd_swarm_plugin_" + "".join(
+                    c if c.isalnum() else "_" for c in str(path.with_suffix("")))
+                if module_name in sys.modules:
+                    continue
+                spec = importlib.util.spec_from_file_location(module_name, path)
+                if spec is None or spec.loader is None or not path.is_file():
+                    raise FileNotFoundError(f"no such file {path}")
+                module = importlib.util.module_from_spec(spec)
+                sys.modules[module_name] = module
+                try:
+                    spec.loader.exec_module(module)
+                except BaseException:
+                    del sys.modules[module_name]
+                    raise
+            else:
+                importlib.import_module(plugin)
+        except RegistryError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any import failure, named
+            raise RegistryError(f"plugin {plugin!r} cannot be loaded: "
+                                f"{type(exc).__name__}: {exc}") from None

@@ -1,0 +1,39 @@
+"""An exchange's wire format is looked up from its registration, not known to the node."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from phd_swarm.core.protocol.messages import EtaPartialMsg, StateMsg, TransferKind, TransferMsg
+from phd_swarm.core.registry import Part, lookup
+from phd_swarm.nodes.voronoi_wire import WIRE
+from phd_swarm.nodes.wire import wire_for
+from phd_swarm.sim import scenario as sc
+
+
+def test_voronoi_phd_names_its_wire_and_it_round_trips_addressed_messages():
+    wire = wire_for(lookup("exchange", "voronoi_phd"))
+    assert wire is WIRE and set(wire.types) == {"state", "cell", "measurements",
+                                                 "eta_partial", "eta_total", "particles"}
+    grid = sc.dames_static().grid
+    transfer = TransferMsg(3, 5, 7, TransferKind.OWNERSHIP, np.array([1, 2]),
+                           np.array([0.1, 0.2]))
+    back = wire.from_ros(wire.to_ros(transfer, 0.5, "map"), grid, 100)
+    assert wire.kind(back) == "particles"
+    assert (wire.sender(back), wire.addressee(back)) == (3, 5)
+    assert np.array_equal(back.bins, [1, 2]) and np.array_equal(back.weights, [0.1, 0.2])
+    partial = EtaPartialMsg(4, 9, 7, np.array([0.5]))
+    assert (wire.sender(partial), wire.addressee(partial)) == (4, 9)
+    state = StateMsg(2, 7, np.array([1.0, 2.0]), 0.0, 1.0)
+    assert wire.kind(state) == "state" and wire.addressee(state) is None
+
+
+def test_an_exchange_without_a_wire_cannot_run_on_ros():
+    part = Part("exchange", "nowire", lambda s, r: None, lambda *a, **k: None, "test")
+    with pytest.raises(ValueError, match="no ROS wire format"):
+        wire_for(part)
+    bad = Part("exchange", "badwire", lambda s, r: None, lambda *a, **k: None, "test",
+               extras={"wire": "phd_swarm.nodes.convert:no_such_wire"})
+    with pytest.raises(ValueError, match="cannot be loaded"):
+        wire_for(bad)
