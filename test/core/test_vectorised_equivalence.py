@@ -23,7 +23,8 @@ from phd_swarm.core.partition import (
     points_in_polygons,
     stack_polygons,
 )
-from phd_swarm.core.protocol import robot as robot_mod
+from phd_swarm.core.polygons import polygon_distances
+from phd_swarm.core.protocol import context as context_mod
 from phd_swarm.core.protocol.robot import FilterContext
 
 
@@ -104,14 +105,14 @@ def test_fov_bins_cache_returns_disk_bins_read_only() -> None:
     ctx = FilterContext(grid, core_models.dames_static())
     radius = ctx.models.detection.radius
     rng = np.random.default_rng(2)
-    sensors = rng.uniform(-2.0, 42.0, size=(robot_mod._FOV_CACHE_SIZE + 20, 2))
+    sensors = rng.uniform(-2.0, 42.0, size=(context_mod._FOV_CACHE_SIZE + 20, 2))
     for q in sensors:
         disk = ctx.fov_bins(q)
         np.testing.assert_array_equal(disk, grid.disk_bins(q, radius))
         assert not disk.flags.writeable
         assert ctx.fov_bins(q.copy()) is disk  # keyed by the value, not the array
     # Bounded: the oldest disks were dropped, and a dropped one is recomputed the same.
-    assert len(ctx._fov_cache) == robot_mod._FOV_CACHE_SIZE
+    assert len(ctx._fov_cache) == context_mod._FOV_CACHE_SIZE
     np.testing.assert_array_equal(ctx.fov_bins(sensors[0]), grid.disk_bins(sensors[0], radius))
 
 
@@ -154,7 +155,7 @@ def test_polygon_distances_equal_pairwise_distances() -> None:
     apart = 0
     for _ in range(60):
         polys = _random_cells(rng, env, int(rng.integers(3, 50)))
-        got = robot_mod._polygon_distances(polys[0], polys[1:])
+        got = polygon_distances(polys[0], polys[1:])
         want = [_reference_polygon_distance(polys[0], b) for b in polys[1:]]
         np.testing.assert_array_equal(got, want)
         apart += int(np.count_nonzero(got))

@@ -7,6 +7,7 @@ import pytest
 
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
+from phd_swarm.core.protocol.mailbox import mail_route
 from phd_swarm.core.protocol.messages import (
     CellMsg,
     EtaPartialMsg,
@@ -17,13 +18,7 @@ from phd_swarm.core.protocol.messages import (
     TransferMsg,
     sender_of,
 )
-from phd_swarm.core.protocol.robot import (
-    FilterContext,
-    Phase,
-    ProtocolError,
-    RobotFilter,
-    _mail_route,
-)
+from phd_swarm.core.protocol.robot import FilterContext, Phase, ProtocolError, RobotFilter
 
 CTX = FilterContext(Grid(Environment(0.0, 0.0, 20.0, 20.0), 1.0), PhdModels())
 POS = np.array([[5.0, 5.0], [15.0, 5.0], [10.0, 15.0]])
@@ -82,9 +77,9 @@ def test_mailbox_routes_name_the_sender_as_sender_of_does():
         (1, "phantom"): TransferMsg(4, 9, 1, TransferKind.PHANTOM, empty, empty),
     }
     for key, msg in messages.items():
-        assert _mail_route(msg) == (sender_of(msg), key) == (4, key)
+        assert mail_route(msg) == (sender_of(msg), key) == (4, key)
     with pytest.raises(TypeError, match="not a protocol message"):
-        _mail_route(object())
+        mail_route(object())
 
 
 def _waiting_for_cells() -> RobotFilter:
