@@ -67,6 +67,14 @@ ACK_TIMEOUT = 5.0
 #: Bound on the wait for the last messages' acknowledgements before exiting [s].
 FINAL_ACK_TIMEOUT = 5.0
 
+#: Wall seconds the publishers stay up after the last message [s]. When a writer goes away,
+#: Fast DDS clears the samples of that writer that a reader has not yet taken from the
+#: reader's history (eProsima/Fast-DDS#2053); a best-effort reader (rclpy's /clock
+#: subscription) acknowledges nothing that :meth:`Replayer.flush` could wait for. Exiting at
+#: once could so take the last clock sample from a node before its executor reads it, and
+#: leave it short of the log's end (seen as a node stuck at 8 s of a 12 s log).
+LINGER = 0.5
+
 #: Publisher QoS of a topic whose channel has no ``offered_qos_profiles`` (a publisher
 #: unknown to the recorder, or a log from another tool): rosbag2's default profile.
 DEFAULT_QOS = {"history": "keep_last", "depth": 10, "reliability": "reliable",
@@ -683,9 +691,11 @@ def _replay_live(argv: Sequence[str], opts: argparse.Namespace, log: LogReader,
         if progress.sent == 0 and not progress.stopped:
             print(f"{PROG}: warning: no message of the selected topics in the window",
                   file=sys.stderr)
-        if not progress.stopped and not replayer.flush():
-            print(f"{PROG}: warning: some messages were not acknowledged by every "
-                  f"subscription within {FINAL_ACK_TIMEOUT:g} s", file=sys.stderr)
+        if not progress.stopped:
+            if not replayer.flush():
+                print(f"{PROG}: warning: some messages were not acknowledged by every "
+                      f"subscription within {FINAL_ACK_TIMEOUT:g} s", file=sys.stderr)
+            stop.wait(LINGER)
         return 0
     finally:
         if replayer is not None:
