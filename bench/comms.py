@@ -24,8 +24,8 @@ import numpy as np
 from results_io import machine_meta, write_results
 
 from phd_swarm.core.grid import Environment
+from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc
-from phd_swarm.sim.engine import InMemoryEngine
 
 AREA_PER_ROBOT = 400.0  # [m^2]
 AREA_PER_TARGET = 500.0  # [m^2]
@@ -44,7 +44,7 @@ def team_scenario(robots: int, seed: int) -> sc.Scenario:
 def measure(robots: int, warmup: int, steps: int, seed: int) -> dict[str, object]:
     """Run one team and summarise the traffic of the measured steps."""
     scenario = team_scenario(robots, seed)
-    engine = InMemoryEngine(scenario, "phd")
+    engine = DistributedEngine(scenario, "phd")
     engine.run(warmup)
     t0 = time.perf_counter()
     engine.run(steps)

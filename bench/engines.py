@@ -5,7 +5,7 @@ controller, team size, resolution), both engines run the same trial from its sta
 warm-up, then the measured steps. Prints the steps per second of each (CPU time of this
 process, so that other load on the machine counts less), the ratio, and how far the two
 runs are apart at the end (team PHD, relative to its mass, and robot positions), which the
-tests bound at every step (test/sim/test_central_engine.py).
+tests bound at every step (test/engines/test_central.py).
 
 Writes ``bench/results/engines-<date>.json``.
 """
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.tools.sweep import make_engine
-from phd_swarm.tools.sweep_spec import find_spec, load_spec
+from phd_swarm.config.sweep_spec import find_spec, load_spec
+from phd_swarm.engines import make_engine
 
 #: (spec, method, robots, targets or None, resolution, warm-up steps, measured steps).
 CASES = (

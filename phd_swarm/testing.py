@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import itertools
 import os
-import shutil
-import signal
 import subprocess
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
+
+from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 
 _domain_counter = itertools.count()
 
@@ -152,39 +152,6 @@ class ChildProcesses:
         for proc in self.procs:
             self.stop(proc)
         clean_fastdds_shm()
-
-
-def stop_process_group(proc: subprocess.Popen, grace: float = 5.0) -> int | None:
-    """SIGINT ``proc``'s process group, SIGKILL it after ``grace`` s; returns the exit code.
-
-    The group is killed in the end even if its leader already exited, so no child of it
-    (e.g. the Python under a shell script) survives.
-    """
-    if proc.poll() is None:
-        for sig, wait in ((signal.SIGINT, grace), (signal.SIGKILL, 5.0)):
-            try:
-                os.killpg(proc.pid, sig)
-            except ProcessLookupError:
-                break
-            try:
-                proc.wait(timeout=wait)
-                break
-            except subprocess.TimeoutExpired:
-                continue
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
-    return proc.poll()
-
-
-def clean_fastdds_shm() -> None:
-    """Remove Fast DDS shared-memory files of dead processes (``fastdds shm clean``)."""
-    tool = shutil.which("fastdds")
-    if tool is None:
-        return
-    subprocess.run([tool, "shm", "clean"], stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL, timeout=30, check=False)
 
 
 def small_static_scenario(robots: int = 5, steps: int = 64, seed: int = 7) -> Any:

@@ -3,8 +3,9 @@
 An :class:`Agent` is one robot of a system (:class:`phd_swarm.core.system.SystemConfig`): its
 exchange participant, estimator and controller, made from the registry
 (:mod:`phd_swarm.core.registry`) with the team's shared set-up (:class:`Team`), and its own
-seeded generator. The in-memory engine (:mod:`phd_swarm.sim.engine`) and the ROS robot node
-(:mod:`phd_swarm.nodes.robot`) drive robots only through it, so the proofs that the two give
+seeded generator. The distributed in-memory engine (:mod:`phd_swarm.engines.distributed`)
+and the ROS robot node (:mod:`phd_swarm.nodes.robot`) drive robots only through it, so the
+proofs that the two give
 the same run cover every system. One step k:
 
 1. :meth:`Agent.observe_team` (or :meth:`Agent.rejoin`): the world's membership at step k;
@@ -97,7 +98,7 @@ class Agent:
     ----------
     exchange : object
         The exchange participant (for ``voronoi_phd`` a
-        :class:`~phd_swarm.core.protocol.robot.RobotFilter`).
+        :class:`~phd_swarm.core.exchange.voronoi_phd.participant.Participant`).
     estimator, controller : object
         The robot's estimator and controller (:class:`~phd_swarm.core.controllers.base.
         Controller`).

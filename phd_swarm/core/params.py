@@ -1,6 +1,6 @@
 """A named parameter with its default, description and allowed values (rclpy-free).
 
-One :class:`ParamSpec` describes a node parameter (:mod:`phd_swarm.nodes.param_specs`) or an
+One :class:`ParamSpec` describes a node parameter (:mod:`phd_swarm.config.node_params`) or an
 option of a system part (:mod:`phd_swarm.core.registry`); its :meth:`ParamSpec.check` is the
 one validator both use, so a bad value is refused with the same message wherever it comes
 from (a config file, a sweep spec, a ROS parameter).

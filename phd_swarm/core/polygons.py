@@ -1,6 +1,6 @@
 """Geometry of cells in array form: radii, bounding boxes, polygon distances, bin-index sets.
 
-The helpers the distributed filter (:mod:`phd_swarm.core.protocol`) needs beside the
+The helpers the distributed filter (:mod:`phd_swarm.core.exchange.voronoi_phd`) needs beside the
 partition itself (:mod:`.partition`): how far a cell reaches from its generator (the contact
 rule, Dames 2020 Sec. III), which cells lie within the motion kernel's reach of each other
 (phantom mass, Sec. III-B), and membership tests on the ascending flat bin indices a robot

@@ -1,6 +1,6 @@
 """Conversions between core values and ROS messages, with the checks of incoming data.
 
-The only module that knows both :mod:`phd_swarm.core.protocol.messages` and
+The only module that knows both :mod:`phd_swarm.core.exchange.voronoi_phd.messages` and
 ``phd_swarm_msgs``. ``from_ros`` functions check what a message *is* (finite numbers,
 consistent lengths, indices on the grid, sizes within bounds) and raise
 :class:`InvalidMessage` naming the field; whether the message is *welcome* (known sender,
@@ -20,8 +20,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, PoseStamped
 from std_msgs.msg import Header
 
-from phd_swarm.core.grid import Grid
-from phd_swarm.core.protocol.messages import (
+from phd_swarm.core.exchange.voronoi_phd.messages import (
     CellMsg,
     EtaPartialMsg,
     EtaTotalMsg,
@@ -31,6 +30,7 @@ from phd_swarm.core.protocol.messages import (
     TransferKind,
     TransferMsg,
 )
+from phd_swarm.core.grid import Grid
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,

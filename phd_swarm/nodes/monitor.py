@@ -33,11 +33,11 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
+from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_step, series_summary
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
-from phd_swarm.nodes.param_specs import MONITOR, SHARED
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import (

@@ -1,4 +1,4 @@
-"""Declare a node's parameters from :mod:`phd_swarm.nodes.param_specs` and the scenario.
+"""Declare a node's parameters from :mod:`phd_swarm.config.node_params` and the scenario.
 
 Every parameter is declared with its description and range (``ros2 param describe`` shows
 them) and is read-only unless its spec says otherwise; values are checked again by the spec
@@ -18,9 +18,9 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from phd_swarm.config import flatten, scenario_to_dict, unflatten
+from phd_swarm.config.node_params import ParamSpec
 from phd_swarm.core.registry import ROLES
 from phd_swarm.core.system import DEFAULT_PARTS, SystemConfig
-from phd_swarm.nodes.param_specs import ParamSpec
 from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
 
 

@@ -1,7 +1,7 @@
 """Recorder: writes every phd_swarm topic of a run to an MCAP log, as rosbag2 would.
 
 Subscriptions are ``raw=True``: the callback gets the CDR bytes that arrived and hands them
-to :class:`phd_swarm.tools.mcap_log.LogWriter` without deserialising, so a message costs a
+to :class:`phd_swarm.logs.mcap_log.LogWriter` without deserialising, so a message costs a
 clock read and an append to the current chunk (DESIGN.md "MCAP logs").
 
 Topics
@@ -42,7 +42,7 @@ Shutdown
     with its summary and footer, writes rosbag2's ``metadata.yaml`` beside it (so that
     ``ros2 bag info`` and rosbag2 readers open the run directory) and logs how many messages
     it wrote. A recorder killed with SIGKILL leaves every finished chunk readable
-    (:mod:`phd_swarm.tools.mcap_log`).
+    (:mod:`phd_swarm.logs.mcap_log`).
 """
 
 from __future__ import annotations
@@ -66,13 +66,9 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.serialization import deserialize_message
 
 from phd_swarm.config import load_run_config
-from phd_swarm.nodes import completeness
-from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.param_specs import RECORDER, SHARED
-from phd_swarm.nodes.params import ParameterError, declare
-from phd_swarm.nodes.qos import publisher_qos, subscription_qos
-from phd_swarm.tools.bag_metadata import write_bag_metadata
-from phd_swarm.tools.mcap_log import (
+from phd_swarm.config.node_params import RECORDER, SHARED
+from phd_swarm.logs.bag_metadata import write_bag_metadata
+from phd_swarm.logs.mcap_log import (
     SEPARATOR,
     DefinitionNotFoundError,
     LogError,
@@ -80,6 +76,10 @@ from phd_swarm.tools.mcap_log import (
     message_definition,
     qos_yaml,
 )
+from phd_swarm.nodes import completeness
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.params import ParameterError, declare
+from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
 #: Topics the graph poll records: /clock and everything under /world, /monitor, /robot_<n>.

@@ -3,9 +3,9 @@
 A thin adapter over :class:`phd_swarm.core.agent.Agent`, the one agent step the in-memory
 engine runs too, with the parts that ``scenario.system`` names (:mod:`phd_swarm.core.registry`;
 for Dames' and Chen's systems the exchange is
-:class:`phd_swarm.core.protocol.robot.RobotFilter`, Dames Alg. 1-2 with Chen's cumulative
-state, and the controllers are those of :mod:`phd_swarm.core.controllers`, Dames eq. 8,
-Chen eq. 2-3 and 12-14). Per step k:
+:class:`phd_swarm.core.exchange.voronoi_phd.participant.Participant`, Dames Alg. 1-2 with
+Chen's cumulative state, and the controllers are those of :mod:`phd_swarm.core.controllers`,
+Dames eq. 8, Chen eq. 2-3 and 12-14). Per step k:
 
 1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
    q^k): the step starts, and the protocol's messages go to the contacts' inboxes
@@ -19,7 +19,7 @@ Chen eq. 2-3 and 12-14). Per step k:
 
 A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds: if no
 new protocol message arrived during a period while the step waits, one round passes
-(:meth:`RobotFilter.tick`), and the robot re-sends its state to its contacts as a
+(:meth:`Participant.tick`), and the robot re-sends its state to its contacts as a
 keep-alive; after ``timeout_ticks`` rounds the awaited peers not heard from in that time
 are declared dead (keep-alives count as heard, not as new).
 
@@ -32,9 +32,9 @@ for dead by the world; it stops when the executor has run no callback for
 Membership comes from the world's team state (``/world/robots``: ids, positions, alive
 flags), which the robot reads every step: step k starts when both the measurement set and
 the team state of step k are in, and the protocol learns from it who died and who came back
-(:meth:`RobotFilter.observe_team`). A robot the world counted dead (it was silent for the
+(:meth:`Participant.observe_team`). A robot the world counted dead (it was silent for the
 world's ``step_timeout``, or its process was restarted) sees itself dead in a team state;
-when the world says it is alive again, it rejoins at that step (:meth:`RobotFilter.rejoin`:
+when the world says it is alive again, it rejoins at that step (:meth:`Participant.rejoin`:
 no bins of its own, the step's hand-over gives it its cell's bins). A restarted process
 (``scripts/run_robot.sh ID`` again) finds the run in progress from the team states it gets
 (the topic is keep-all, transient-local: the history arrives first), ignores the old
@@ -42,7 +42,7 @@ steps, reports ``READY``, and the world lets it rejoin at the next step.
 
 Lossy links (fault injection, same option and meaning as the in-memory engine's
 ``faults``): ``fault_drop`` and ``fault_delay`` route every outgoing protocol message through
-a seeded :class:`phd_swarm.core.protocol.faults.FaultyLink`; delayed messages are held back
+a seeded :class:`phd_swarm.core.exchange.faults.FaultyLink`; delayed messages are held back
 whole tick periods. The protocol re-sends what a waiting peer lacks when its keep-alive
 arrives, so a lost message costs time, not a robot.
 
@@ -63,13 +63,14 @@ from geometry_msgs.msg import Point, PoseStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
+from phd_swarm.config.node_params import ROBOT, SHARED
 from phd_swarm.core.agent import Team
-from phd_swarm.core.protocol.faults import FaultyLink, LinkFaults
-from phd_swarm.core.protocol.messages import Envelope, Message, ScanMsg
-from phd_swarm.core.protocol.robot import ProtocolError
+from phd_swarm.core.exchange.base import Envelope
+from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
+from phd_swarm.core.exchange.voronoi_phd.messages import Message, ScanMsg
+from phd_swarm.core.exchange.voronoi_phd.participant import ProtocolError
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.param_specs import ROBOT, SHARED
 from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.wire import wire_for

@@ -6,7 +6,7 @@ and phantom), as ``phd_swarm_msgs`` types; conversions in :mod:`phd_swarm.nodes.
 
 from __future__ import annotations
 
-from phd_swarm.core.protocol.messages import (
+from phd_swarm.core.exchange.voronoi_phd.messages import (
     CellMsg,
     EtaPartialMsg,
     EtaTotalMsg,

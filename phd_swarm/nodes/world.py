@@ -46,11 +46,11 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock as ClockMsg
 from visualization_msgs.msg import MarkerArray
 
+from phd_swarm.config.node_params import SHARED, WORLD
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.markers import world_markers
-from phd_swarm.nodes.param_specs import SHARED, WORLD
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.sim.world import World

@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.scoring import score_step, series_summary
+from phd_swarm.logs.mcap_log import LogError
 from phd_swarm.tools.log_check import WARNING, check_log
-from phd_swarm.tools.mcap_log import LogError
 from phd_swarm.tools.plots import Frame, save_animation, save_series, save_snapshot
 from phd_swarm.tools.run_log import RunLog, load_run
 

@@ -4,9 +4,9 @@
 [--scenarios NAME ...] [--drops P ...] [--delay P] [--max-delay-rounds D]
 [--timeout-ticks T]``
 
-Runs :class:`phd_swarm.sim.engine.InMemoryEngine` (the robots' protocol, message by message)
-on ``dames_static`` (and ``dames_moving`` if asked) with every envelope going through a
-:class:`~phd_swarm.core.protocol.faults.FaultyLink`: drop rates 0, 1, 2, 5 and 10 % by
+Runs :class:`phd_swarm.engines.distributed.DistributedEngine` (the robots' protocol, message
+by message) on ``dames_static`` (and ``dames_moving`` if asked) with every envelope going through a
+:class:`~phd_swarm.core.exchange.faults.FaultyLink`: drop rates 0, 1, 2, 5 and 10 % by
 default, and a delay-only condition (5 % of the messages late by 1 or 2 rounds). Each
 condition runs the same seeds (scenario seed s, link seed s); the loss-free run of a seed is
 its reference. Per condition it reports:
@@ -40,9 +40,10 @@ from typing import Any
 
 import numpy as np
 
-from phd_swarm.core.protocol.faults import LinkFaults
+from phd_swarm.core.exchange.faults import LinkFaults
+from phd_swarm.core.exchange.voronoi_phd.context import TIMEOUT_TICKS
+from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc
-from phd_swarm.sim.engine import InMemoryEngine
 
 #: Scenario presets the study can run.
 SCENARIOS: dict[str, Callable[..., sc.Scenario]] = {"dames_static": sc.dames_static,
@@ -137,7 +138,7 @@ def run_trial(scenario: sc.Scenario, faults: LinkFaults | None, timeout_ticks: i
     from phd_swarm.core.scoring import score_step
 
     wall0 = time.perf_counter()
-    engine = InMemoryEngine(scenario, "phd", timeout_ticks=timeout_ticks, faults=faults)
+    engine = DistributedEngine(scenario, "phd", timeout_ticks=timeout_ticks, faults=faults)
     ospa = np.zeros(scenario.steps)
     l1 = np.zeros(scenario.steps)
     images = []
@@ -168,7 +169,7 @@ def run_trial(scenario: sc.Scenario, faults: LinkFaults | None, timeout_ticks: i
 
 
 def run_study(scenarios: Sequence[str], robots: int, steps: int, seeds: int,
-              conds: Sequence[Condition], timeout_ticks: int = 3,
+              conds: Sequence[Condition], timeout_ticks: int = TIMEOUT_TICKS,
               progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
     """Every scenario x seed x condition; the loss-free run of each seed first.
 

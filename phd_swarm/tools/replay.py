@@ -3,7 +3,7 @@
 ``scripts/replay.sh LOG [--rate R | --fast] [--topics T [T ...]] [--start S] [--end E]
 [--wait-subscribers N] [--wait-timeout W] [--dry-run] [--quiet] [--ros-args ...]``
 
-1. opens LOG with :mod:`phd_swarm.tools.mcap_log` (a log cut short by a crash replays its
+1. opens LOG with :mod:`phd_swarm.logs.mcap_log` (a log cut short by a crash replays its
    complete records, with a warning) and selects the messages of ``--topics`` whose log
    time lies in ``[first + S, first + E)``, ``first`` being the log time of the log's first
    message, whatever the selection;
@@ -50,7 +50,7 @@ from mcap.reader import make_reader
 from mcap.records import Channel
 from mcap.stream_reader import StreamReader
 
-from phd_swarm.tools.mcap_log import LogError, LogReader, LogRecord, open_log
+from phd_swarm.logs.mcap_log import LogError, LogReader, LogRecord, open_log
 
 PROG = "replay.sh"
 
@@ -130,7 +130,7 @@ def offered_qos(text: str) -> Any:
     ----------
     text : str
         A channel's ``offered_qos_profiles``: the YAML list of rosbag2 (Jazzy writes policy
-        names, older versions numbers) that :func:`phd_swarm.tools.mcap_log.qos_yaml`
+        names, older versions numbers) that :func:`phd_swarm.logs.mcap_log.qos_yaml`
         writes, one entry per publisher the recorder saw. Empty for none.
 
     Returns
@@ -643,7 +643,7 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
 @contextlib.contextmanager
 def _log_warnings_to_stderr() -> Iterator[None]:
     """Show the log reader's warnings (a truncated log) as ``replay.sh: warning: ...``."""
-    logger = logging.getLogger("phd_swarm.tools")
+    logger = logging.getLogger("phd_swarm.logs")
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter(f"{PROG}: warning: %(message)s"))
     handler.setLevel(logging.WARNING)

@@ -35,10 +35,10 @@ from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
 from phd_swarm.core.cumulative import cumulative_weight, observe_scans
+from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.sim.scenario import Scenario
-from phd_swarm.tools.mcap_log import LogError, LogRecord, open_log
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,

@@ -38,12 +38,12 @@ from pathlib import Path
 from typing import IO, Any
 
 from phd_swarm.config import RunConfig, load_run_config
+from phd_swarm.logs.bag_metadata import write_bag_metadata
+from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
-from phd_swarm.testing import clean_fastdds_shm, stop_process_group
-from phd_swarm.tools.bag_metadata import write_bag_metadata
-from phd_swarm.tools.mcap_log import LogError, read_metadata
+from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
 #: simple discovery among ~40 processes on 2 cores lost matches).

@@ -4,16 +4,16 @@
 [--dry-run]``
 
 SPEC is a name under ``config/sweeps/`` or a path to a spec file
-(:mod:`phd_swarm.tools.sweep_spec`). The specs in the repository reproduce Dames (2020)
+(:mod:`phd_swarm.config.sweep_spec`). The specs in the repository reproduce Dames (2020)
 Fig. 2 (static targets, final OSPA) and Fig. 5 (moving targets, mean OSPA over the last
 250 s), and Chen, Dames & Park (2021) Fig. 3a/b (clustered targets, median OSPA over
 300-1000 s, and the mean OSPA over time).
 
 Each trial runs on the spec's engine (``engine:``, or ``--engine``): by default
-:class:`phd_swarm.sim.central_engine.CentralEngine`, one filter and one partition for the
-team, or :class:`phd_swarm.sim.engine.InMemoryEngine`, the robots' protocol message by
+:class:`phd_swarm.engines.central.CentralEngine`, one filter and one partition for the
+team, or :class:`phd_swarm.engines.distributed.DistributedEngine`, the robots' protocol message by
 message, which computes exactly the ROS stack's team PHD and is several times slower. The
-two agree up to rounding (test/sim/test_central_engine.py). Every step is scored with
+two agree up to rounding (test/engines/test_central.py). Every step is scored with
 :func:`phd_swarm.core.scoring.score_step`, as the live monitor does: the truth X^k is taken
 before step k and compared with the team PHD after the step's update (OSPA, Dames eq. 12,
 c = 10 m, p = 1). A trial's result depends only on its scenario (seed included),
@@ -60,7 +60,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from phd_swarm.tools.sweep_spec import (
+from phd_swarm.config.sweep_spec import (
     ENGINES,
     SpecError,
     SweepSpec,
@@ -68,6 +68,7 @@ from phd_swarm.tools.sweep_spec import (
     find_spec,
     load_spec,
 )
+from phd_swarm.engines import make_engine
 
 #: Columns of results.csv, in order.
 COLUMNS = ("spec", "trial", "method", "controller", "engine", "robots", "targets",
@@ -79,8 +80,8 @@ COLUMNS = ("spec", "trial", "method", "controller", "engine", "robots", "targets
            "lost_to_dead", "wall_s", "cpu_s", "config_hash")
 
 #: Robot protocol counters summed over the team into results.csv (see
-#: :mod:`phd_swarm.core.protocol.robot`): a missed neighbour and what it cost, peers
-#: declared dead by a timeout and the bins lost with them.
+#: :mod:`phd_swarm.core.exchange.voronoi_phd.participant`): a missed neighbour and what it
+#: cost, peers declared dead by a timeout and the bins lost with them.
 PROTOCOL_COLUMNS = ("cell_mismatch", "misrouted_bins", "unroutable_bins", "duplicate_bins",
                     "orphan_bins", "timeouts", "lost_to_dead")
 
@@ -150,17 +151,6 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
            "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0,
            "config_hash": trial.config_hash}
     return row, s
-
-
-def make_engine(name: str, scenario):
-    """The engine ``name`` (:data:`~phd_swarm.tools.sweep_spec.ENGINES`) for one trial."""
-    if name == "central":
-        from phd_swarm.sim.central_engine import CentralEngine
-        return CentralEngine(scenario)
-    if name == "distributed":
-        from phd_swarm.sim.engine import InMemoryEngine
-        return InMemoryEngine(scenario)
-    raise ValueError(f"unknown engine {name!r}")
 
 
 def protocol_counters(engine) -> dict[str, int]:

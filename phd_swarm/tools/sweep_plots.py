@@ -32,7 +32,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from phd_swarm.tools.sweep_spec import SweepSpec
+from phd_swarm.config.sweep_spec import SweepSpec
 
 #: Box colours, one per method in the spec's order (colour-blind safe).
 COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")

@@ -7,9 +7,9 @@ import numpy as np
 from phd_swarm.core import registry
 from phd_swarm.core.agent import Agent, Team, robot_generator
 from phd_swarm.core.controllers.base import Controller, Decision
-from phd_swarm.core.protocol.robot import RobotFilter
+from phd_swarm.core.exchange.voronoi_phd.participant import Participant
+from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc
-from phd_swarm.sim.engine import InMemoryEngine
 from phd_swarm.sim.world import World
 
 
@@ -42,7 +42,7 @@ def test_robot_generators_are_their_own_streams():
 def test_an_agent_is_made_of_the_registered_parts():
     team = Team.build(_scenario().with_system(controller="chen_o"), timeout_ticks=4)
     agent = team.agent(2)
-    assert isinstance(agent, Agent) and isinstance(agent.exchange, RobotFilter)
+    assert isinstance(agent, Agent) and isinstance(agent.exchange, Participant)
     assert agent.exchange.ctx.timeout_ticks == 4 and agent.exchange.ctx.cumulative
     assert agent.exchange is not team.agent(2).exchange, "one instance per robot"
 
@@ -53,7 +53,7 @@ def test_the_engine_steps_every_robot_through_its_agent_with_its_generator():
     try:
         runs = []
         for _ in range(2):
-            engine = InMemoryEngine(_scenario(), controller="test_jitter")
+            engine = DistributedEngine(_scenario(), controller="test_jitter")
             engine.run()
             runs.append(engine.world.robot_positions.copy())
             assert all(a.controller.seen == list(range(8)) for a in engine.agents.values())

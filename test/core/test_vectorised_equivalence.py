@@ -13,6 +13,8 @@ import pytest
 from phd_swarm.core import models as core_models
 from phd_swarm.core import partition
 from phd_swarm.core.cumulative import cumulative_init, cumulative_update, cumulative_update_counts
+from phd_swarm.core.exchange.voronoi_phd import context as context_mod
+from phd_swarm.core.exchange.voronoi_phd.participant import FilterContext
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.partition import (
     assign_bins,
@@ -24,8 +26,6 @@ from phd_swarm.core.partition import (
     stack_polygons,
 )
 from phd_swarm.core.polygons import polygon_distances
-from phd_swarm.core.protocol import context as context_mod
-from phd_swarm.core.protocol.robot import FilterContext
 
 
 def _random_cells(rng: np.random.Generator, env: Environment, count: int) -> list[np.ndarray]:

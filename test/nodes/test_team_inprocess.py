@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.sim.engine import InMemoryEngine
+from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.testing import small_static_scenario, start_swarm
 
 
@@ -52,7 +52,7 @@ def test_lockstep_team_equals_in_memory_engine_and_ospa_falls(tmp_path):
     missing = {t: typ for t, typ in expected.items() if typ not in graph.get(t, [])}
     assert not missing, f"topics missing from the graph while the swarm runs: {missing}"
 
-    engine = InMemoryEngine(scenario, "phd")
+    engine = DistributedEngine(scenario, "phd")
     worst = 0.0
     for k in range(scenario.steps):
         engine.step()

@@ -5,7 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.protocol.messages import EtaPartialMsg, StateMsg, TransferKind, TransferMsg
+from phd_swarm.core.exchange.voronoi_phd.messages import (
+    EtaPartialMsg,
+    StateMsg,
+    TransferKind,
+    TransferMsg,
+)
 from phd_swarm.core.registry import Part, lookup
 from phd_swarm.nodes.voronoi_wire import WIRE
 from phd_swarm.nodes.wire import wire_for

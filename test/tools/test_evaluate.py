@@ -14,9 +14,9 @@ from rclpy.serialization import deserialize_message
 
 from phd_swarm.core.central import CentralPhdFilter
 from phd_swarm.core.scan import Scan
+from phd_swarm.logs.mcap_log import LogWriter, open_log, read_messages
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.completeness import step_of
-from phd_swarm.tools.mcap_log import LogWriter, open_log, read_messages
 from phd_swarm.tools.run_log import config_from_log, load_run
 from phd_swarm_msgs.msg import DensityGrid, MeasurementSet
 
@@ -219,7 +219,7 @@ def chen_run(tmp_path_factory, record_swarm) -> Path:
 
 def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp_path):
     from phd_swarm.core.cumulative import cumulative_weight
-    from phd_swarm.sim.engine import InMemoryEngine
+    from phd_swarm.engines.distributed import DistributedEngine
 
     run = load_run(chen_run / "run.mcap")
     assert run.controller == "chen_o" and len(run.steps) == 12
@@ -227,7 +227,7 @@ def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp
 
     # The in-memory engine computes what the ROS robots computed (proven bit for bit in
     # test_team_inprocess); its robots' own cumulative state is the reference.
-    engine = InMemoryEngine(run.scenario, "chen_o")
+    engine = DistributedEngine(run.scenario, "chen_o")
     grid = run.scenario.grid
     for k in range(12):
         engine.step()

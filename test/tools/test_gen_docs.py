@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from phd_swarm.nodes import param_specs, topics
+from phd_swarm.config import node_params
+from phd_swarm.nodes import topics
 from phd_swarm.tools import gen_docs
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,7 +44,7 @@ def test_every_topic_parameter_and_key_is_in_the_text():
             assert f"| `{spec.name}` |" in params
     for key in gen_docs.SCENARIO_MEANINGS:
         assert f"| `scenario.{key}` |" in params
-    assert set(param_specs.NODES.values()) <= {s for _, _, s in gen_docs.NODE_TABLES}
+    assert set(node_params.NODES.values()) <= {s for _, _, s in gen_docs.NODE_TABLES}
 
 
 def test_a_target_field_shows_only_for_the_presets_whose_kind_uses_it():

@@ -19,8 +19,8 @@ from rclpy.qos import (
     qos_profile_sensor_data,
 )
 
+from phd_swarm.logs.mcap_log import qos_yaml, read_messages, summarize
 from phd_swarm.nodes.qos import CLOCK, LATCHED, STEP_PUB
-from phd_swarm.tools.mcap_log import qos_yaml, read_messages, summarize
 from phd_swarm.tools.replay import Pacer, main, offered_qos
 
 ROOT = Path(__file__).resolve().parents[2]

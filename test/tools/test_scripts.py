@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from phd_swarm.tools.mcap_log import read_messages, read_metadata, summarize
+from phd_swarm.logs.mcap_log import read_messages, read_metadata, summarize
 from phd_swarm_msgs.msg import RobotStatus
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from phd_swarm.config.sweep_spec import SpecError, find_spec, load_spec
+from phd_swarm.engines import make_engine
 from phd_swarm.tools import sweep
-from phd_swarm.tools.sweep_spec import SpecError, find_spec, load_spec
 
 ROOT = Path(__file__).resolve().parents[2]
 SWEEP = str(ROOT / "scripts" / "sweep.sh")
@@ -395,8 +396,8 @@ def test_box_plot_title_says_how_many_trials_each_box_holds():
 
 
 def test_panel_titles_say_initial_targets_when_targets_are_born():
+    from phd_swarm.config.sweep_spec import find_spec, load_spec
     from phd_swarm.tools.sweep_plots import _panel_title
-    from phd_swarm.tools.sweep_spec import find_spec, load_spec
 
     moving, static = (load_spec(find_spec(n)) for n in ("dames_moving", "dames_static"))
     assert _panel_title({"targets": 20}, moving) == "20 initial targets"
@@ -453,7 +454,7 @@ def test_a_controller_registered_by_a_plugin_runs_in_a_sweep(tmp_path):
     assert rows["stationary"]["controller"] == "stationary"
     trial = next(t for t in load_spec(spec_path, quick=True).trials_list()
                  if t.method == "stationary")
-    engine = sweep.make_engine(trial.engine, trial.scenario)
+    engine = make_engine(trial.engine, trial.scenario)
     start = engine.world.robot_positions.copy()
     engine.run()
     assert np.array_equal(engine.world.robot_positions, start), "a stationary team stays put"

@@ -4,9 +4,9 @@ The filter's equations live in :mod:`phd_swarm.core.phd_grid` (prediction eq. 3,
 4-6) and :class:`phd_swarm.core.central.CentralPhdFilter` (the whole map in one filter, the
 central engine's team filter). In the distributed system a robot's bins and their masses
 move from robot to robot with its cell, so they are held and updated by the ``voronoi_phd``
-exchange participant (:mod:`phd_swarm.core.protocol.robot`); what a robot reads from its own
-bins is :class:`GridPhdEstimator`: the estimates (extraction over the window around the
-cell, Dames Sec. IV) and the expected number of targets.
+exchange participant (:mod:`phd_swarm.core.exchange.voronoi_phd.participant`); what a
+robot reads from its own bins is :class:`GridPhdEstimator`: the estimates (extraction over
+the window around the cell, Dames Sec. IV) and the expected number of targets.
 """
 
 from __future__ import annotations

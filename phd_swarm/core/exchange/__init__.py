@@ -1,3 +1,7 @@
-"""Exchanges: the built-in ones register on import (:mod:`phd_swarm.core.registry`)."""
+"""Exchanges: the built-in ones register on import (:mod:`phd_swarm.core.registry`).
+
+:mod:`.base` is the role (:class:`~.base.Exchange`, :class:`~.base.Envelope`); :mod:`.faults`
+injects lossy links into any exchange's traffic; :mod:`.voronoi_phd` is Dames' exchange.
+"""
 
 from . import voronoi_phd  # noqa: F401  (registration)

@@ -1,0 +1,638 @@
+"""Sweep specifications: which trials a parameter sweep runs and how each is scored.
+
+A spec (``config/sweeps/*.yaml``) describes one experiment of the papers as a grid of
+trials: team sizes x target counts x grid resolutions x methods x seeds, over a scenario
+preset of :mod:`phd_swarm.sim.scenario`::
+
+    preset: dames_static          # dames_static | dames_moving | chen_clustered
+    figure: Dames (2020) Fig. 2   # title of the plots
+    methods: {PHD: phd, uniform: uniform}   # label -> controller, or a system block
+    robots: [10, 20, 30]          # team sizes
+    targets: [10, 30, 50]         # optional: target counts (default: the preset's)
+    resolutions: [1.0]            # optional: grid resolutions [m] (default: the preset's)
+    trials: 10                    # trial i uses seed base_seed + i for every cell
+    base_seed: 0
+    duration: 250.0               # optional [s] (default: the preset's)
+    metric: final                 # final | mean | median OSPA
+    window: [250.0, 500.0]        # [s], for mean / median: steps with start <= k dt <= end
+    engine: central               # optional: central (default) | distributed
+    scenario: {...}               # optional: other overrides (scenario_from_dict keys)
+    quick: {robots: [10], trials: 2}   # overrides of the keys above for --quick
+
+Common random numbers: every method, team size and resolution of trial i uses the same
+scenario seed, hence the same targets (the world draws them from their own stream,
+:mod:`phd_swarm.sim.world`), so method comparisons are paired, as in Dames Sec. IV ("the
+same collection of starting locations for the robots and targets").
+
+Every error names the file and the key (``config/sweeps/x.yaml: quick.robots[1]: expected
+an integer >= 1, got 'ten'``) and is raised before any trial runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import numbers
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from phd_swarm.config import read_yaml
+from phd_swarm.core.registry import ROLES
+from phd_swarm.core.system import SystemConfig
+from phd_swarm.engines import ENGINES as ENGINE_CLASSES
+from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
+
+#: Ways to reduce a trial's per-step OSPA series to one number.
+METRICS = ("final", "mean", "median")
+
+#: Engines a trial can run on (:data:`phd_swarm.engines.ENGINES`): ``central``, one filter
+#: and partition for the team, several times faster, or ``distributed``, the robots' agents
+#: message by message, bit-equal to the ROS stack. Both give the same team PHD and paths up
+#: to rounding (test/engines/test_central.py).
+ENGINES = tuple(ENGINE_CLASSES)
+
+#: Keys of a spec that ``quick:`` may override.
+OVERRIDABLE = ("figure", "description", "methods", "robots", "targets", "resolutions",
+               "trials", "base_seed", "duration", "metric", "window", "engine", "scenario")
+
+#: Top-level keys of a spec.
+TOP_KEYS = ("preset", "name", *OVERRIDABLE, "quick")
+
+#: Scenario fields a sweep sets itself (through its axes), not allowed under ``scenario:``.
+AXIS_FIELDS = ("preset", "robots", "seed", "resolution", "duration")
+
+_LABEL = re.compile(r"^[A-Za-z0-9_]+$")
+
+
+
+class SpecError(ValueError):
+    """A sweep spec is malformed; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One run of a sweep: a scenario, a controller and the way to score it.
+
+    Attributes
+    ----------
+    method : str
+        The spec's label of the method (e.g. ``PHD``, ``D``).
+    controller : str
+        The method's system as text (:func:`controller_name`): the controller, with the
+        options and non-default parts the method sets, if any.
+    robots, targets : int
+        Team size and number of targets drawn (static) or initial (moving) or in total
+        (clustered).
+    resolution : float
+        Grid resolution [m].
+    index : int
+        Trial number i in 0..trials-1; the seed is ``base_seed + i``.
+    seed : int
+        Scenario seed.
+    scenario : Scenario
+        The full scenario of the run.
+    metric : str
+        One of :data:`METRICS`.
+    window : (float, float)
+        [start, end] of the mean / median window [s].
+    config_hash : str
+        Hash of everything the trial's result depends on (scenario, controller, metric,
+        window, engine): a stored result is reused only if its hash matches.
+    engine : str
+        One of :data:`ENGINES`.
+    """
+
+    method: str
+    controller: str
+    robots: int
+    targets: int
+    resolution: float
+    index: int
+    seed: int
+    scenario: Scenario
+    metric: str
+    window: tuple[float, float]
+    config_hash: str
+    engine: str = "central"
+
+    @property
+    def key(self) -> str:
+        """File-name-safe id of the trial, unique within a sweep."""
+        return (f"{self.method}_r{self.robots:03d}_t{self.targets:03d}_"
+                f"res{self.resolution:g}_s{self.seed}")
+
+    def cost(self) -> float:
+        """Rough relative cost [a.u.], for scheduling the longest first and for the ETA.
+
+        Fitted to engine timings on this project's 2-core machine. Distributed engine:
+        time per step grows as about ``robots**1.2``, ~1.7x for Chen's scenario (5 m/s
+        robots, clustered targets), ~1.3x at 0.5 m bins and ~6x at 0.1 m bins against 1 m.
+        Central engine (2026-12-01): about ``robots**0.7`` (79 steps/s with 50 robots, 52
+        with 100), ~1.4x for Chen's scenario, and 1 : 1.4 : 19 at 1 m, 0.5 m and 0.1 m.
+        """
+        inv_area = min(1.0, self.resolution) ** -2
+        kind = 1.7 if self.scenario.targets.kind == "clustered_walk" else 1.0
+        if self.engine == "central":
+            return self.scenario.steps * self.robots ** 0.7 * (1.0 + 0.18 * inv_area) * kind
+        return self.scenario.steps * self.robots ** 1.2 * (1.0 + 0.05 * inv_area) * kind
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep spec (one form: full or quick).
+
+    Attributes
+    ----------
+    name : str
+        Spec name (the file's stem unless ``name:`` is given).
+    path : Path
+        The file it came from.
+    quick : bool
+        True for the ``quick:`` form.
+    preset : str
+        Scenario preset (:data:`phd_swarm.sim.scenario.PRESETS`).
+    figure, description : str
+        Plot title and free text.
+    methods : dict of str to str
+        Label -> controller kind, in plotting order.
+    robots, targets : tuple of int
+        Team sizes, target counts.
+    resolutions : tuple of float
+        Grid resolutions [m].
+    trials, base_seed : int
+        Seeds are ``base_seed + i`` for i < trials.
+    duration : float
+        Run length [s].
+    metric : str
+        One of :data:`METRICS`.
+    window : (float, float)
+        Window [s] of the mean / median OSPA (``(0, duration)`` when unset).
+    engine : str
+        One of :data:`ENGINES` (default ``central``).
+    scenario : Mapping
+        The ``scenario:`` overrides.
+    """
+
+    name: str
+    path: Path
+    quick: bool
+    preset: str
+    figure: str
+    description: str
+    methods: dict[str, str]
+    robots: tuple[int, ...]
+    targets: tuple[int, ...]
+    resolutions: tuple[float, ...]
+    trials: int
+    base_seed: int
+    duration: float
+    metric: str
+    window: tuple[float, float]
+    scenario: Mapping[str, Any]
+    engine: str = "central"
+
+    @property
+    def label(self) -> str:
+        """The default output directory's name: ``name`` or ``name_quick``.
+
+        ``_distributed`` is appended when the trials run on the distributed engine.
+        """
+        label = f"{self.name}_quick" if self.quick else self.name
+        return label if self.engine == "central" else f"{label}_{self.engine}"
+
+    @property
+    def metric_label(self) -> str:
+        """Axis label of the metric, e.g. ``median OSPA over 300-1000 s [m]``."""
+        if self.metric == "final":
+            return "final OSPA [m]"
+        a, b = self.window
+        return f"{self.metric} OSPA over {a:g}-{b:g} s [m]"
+
+    def base_scenario(self) -> Scenario:
+        """The preset with the ``scenario:`` overrides and the duration applied."""
+        return scenario_from_dict({"preset": self.preset, **self.scenario,
+                                   "duration": self.duration}, where=str(self.path),
+                                  base_dir=self.path.parent)
+
+    def trials_list(self) -> list[Trial]:
+        """Every trial of the sweep, in a fixed order (seed, robots, targets, res, method)."""
+        base = self.base_scenario()
+        out = []
+        for i in range(self.trials):
+            seed = self.base_seed + i
+            for robots in self.robots:
+                for targets in self.targets:
+                    for res in self.resolutions:
+                        sc = base.with_overrides(robots=robots, resolution=res, seed=seed,
+                                                 targets=_with_count(base, targets).targets)
+                        for label, kind in self.methods.items():
+                            msc = sc.with_system(**method_system(kind))
+                            out.append(Trial(label, kind, robots, targets, res, i, seed, msc,
+                                             self.metric, self.window,
+                                             config_hash(msc, kind, self.metric,
+                                                         self.window, self.engine),
+                                             self.engine))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The resolved form as plain values (written next to the results)."""
+        return {"name": self.name, "file": str(self.path), "quick": self.quick,
+                "preset": self.preset, "figure": self.figure,
+                "description": self.description, "methods": dict(self.methods),
+                "robots": list(self.robots), "targets": list(self.targets),
+                "resolutions": list(self.resolutions), "trials": self.trials,
+                "base_seed": self.base_seed, "duration": self.duration,
+                "metric": self.metric, "window": list(self.window),
+                "engine": self.engine, "scenario": _plain(self.scenario)}
+
+
+def config_hash(scenario: Scenario, controller: str, metric: str,
+                window: tuple[float, float], engine: str = "central") -> str:
+    """16 hex digits of SHA-256 over the scenario's fields, controller, metric and engine.
+
+    The scenario's system enters through the method text ``controller``; the system itself
+    is hashed only where it differs from what that text says (other parts, options or
+    plugins set under ``scenario:``), so the hashes of results from before the system
+    block existed stay valid.
+    """
+    fields = dataclasses.asdict(scenario)
+    fields.pop("system")
+    doc = {"scenario": _plain(fields), "controller": controller,
+           "metric": metric, "window": [float(w) for w in window], "engine": engine}
+    if scenario.system != SystemConfig().with_parts(**method_system(controller)):
+        doc["system"] = _plain(scenario.system.to_dict())
+    text = json.dumps(doc, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _with_count(base: Scenario, count: int) -> Scenario:
+    """``base`` with ``count`` targets; clustered targets are split evenly over clusters."""
+    t = base.targets
+    if t.kind == "clustered_walk" and t.per_cluster:
+        n = len(t.per_cluster)
+        per = tuple(count // n + (1 if i < count % n else 0) for i in range(n))
+        return base.with_overrides(targets=dataclasses.replace(t, count=count,
+                                                               per_cluster=per))
+    return base.with_overrides(targets=dataclasses.replace(t, count=count))
+
+
+# ------------------------------------------------------------------------ finding a spec
+def sweeps_dir() -> Path:
+    """``config/sweeps`` of the repository (``$PHD_SWARM_ROOT`` if set)."""
+    root = os.environ.get("PHD_SWARM_ROOT")
+    base = Path(root) if root else Path(__file__).resolve().parents[2]
+    return base / "config" / "sweeps"
+
+
+def find_spec(name_or_path: str) -> Path:
+    """The spec file: an existing path, or a name under :func:`sweeps_dir`.
+
+    Raises
+    ------
+    SpecError
+        If neither exists (the message lists the specs available).
+    """
+    p = Path(name_or_path)
+    if p.suffix in (".yaml", ".yml") or os.sep in name_or_path:
+        if p.is_file():
+            return p
+        raise SpecError(f"{name_or_path}: no such spec file")
+    d = sweeps_dir()
+    for ext in (".yaml", ".yml"):
+        if (d / f"{name_or_path}{ext}").is_file():
+            return d / f"{name_or_path}{ext}"
+    known = sorted(q.stem for q in d.glob("*.yaml")) if d.is_dir() else []
+    raise SpecError(f"{name_or_path}: unknown sweep spec; expected a path to a YAML file or "
+                    f"one of {known} (in {d})")
+
+
+# -------------------------------------------------------------------------- validation
+def _fail(where: str, key: str, msg: str) -> SpecError:
+    return SpecError(f"{where}: {key}: {msg}")
+
+
+def _int(where: str, key: str, value: Any, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
+        raise _fail(where, key, f"expected an integer >= {low}, got {value!r}")
+    return int(value)
+
+
+def _number(where: str, key: str, value: Any, low: float, strict: bool) -> float:
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if ok:
+        v = float(value)
+        ok = math.isfinite(v) and (v > low if strict else v >= low)
+    if not ok:
+        raise _fail(where, key, f"expected a number {'>' if strict else '>='} {low:g}, "
+                                f"got {value!r}")
+    return float(value)
+
+
+def _str(where: str, key: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise _fail(where, key, f"expected a string, got {value!r}")
+    return value
+
+
+def _list(where: str, key: str, value: Any, item) -> tuple:
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence):
+        raise _fail(where, key, f"expected a list, got {value!r}")
+    if not value:
+        raise _fail(where, key, "expected a non-empty list")
+    out = tuple(item(f"{key}[{i}]", v) for i, v in enumerate(value))
+    if len(set(out)) != len(out):
+        raise _fail(where, key, f"values must be distinct, got {list(value)}")
+    return out
+
+
+def _mapping(where: str, key: str, value: Any, allowed: Sequence[str] | None) -> Mapping:
+    if not isinstance(value, Mapping):
+        raise _fail(where, key, f"expected a mapping, got {value!r}")
+    if allowed is not None:
+        for k in value:
+            if k not in allowed:
+                name = f"{key}.{k}" if key else str(k)
+                raise _fail(where, name, f"unknown key; expected one of {sorted(allowed)}")
+    return value
+
+
+def _methods(where: str, key: str, value: Any) -> dict[str, str]:
+    """Label -> method text (:func:`controller_name`), each checked against the registry.
+
+    A method is a controller name (``phd``) or a system block (``{controller: chen_o,
+    options: {cumulative_mode: laplace}}``, :mod:`phd_swarm.core.system`); the older form
+    ``{kind: chen_o, cumulative_mode: laplace}`` is read as the same.
+    """
+    m = _mapping(where, key, value, None)
+    if not m:
+        raise _fail(where, key, "expected at least one method (label: controller)")
+    out = {}
+    for label, method in m.items():
+        name = f"{key}.{label}"
+        if not isinstance(label, str) or not _LABEL.match(label):
+            raise _fail(where, name, "a method label must be letters, digits and underscores")
+        legacy = isinstance(method, Mapping) and "kind" in method
+        if isinstance(method, str):
+            block: dict[str, Any] = {"controller": method}
+        elif isinstance(method, Mapping) and "kind" in method:
+            opts = dict(method)
+            block = {"controller": opts.pop("kind"), "options": opts}
+        elif isinstance(method, Mapping):
+            block = dict(method)
+            if "plugins" in block:
+                raise _fail(where, f"{name}.plugins", "list plugins once, under "
+                                                      "scenario.system.plugins")
+            if "controller" not in block:
+                raise _fail(where, f"{name}.controller", "missing; expected a controller")
+        else:
+            raise _fail(where, name, f"expected a controller or a system block, got "
+                                     f"{method!r}")
+        try:
+            system = SystemConfig.from_dict(block, "system")
+        except ValueError as exc:
+            sub, _, msg = str(exc).removeprefix("system.").partition(": ")
+            if legacy:
+                sub = sub.removeprefix("options.").replace("controller", "kind")
+            if isinstance(method, str) and sub == "controller":
+                raise _fail(where, name, msg) from None
+            raise _fail(where, f"{name}.{sub}", msg) from None
+        parts = {r: block[r] for r in ROLES if r in block and r != "controller"}
+        out[label] = controller_name(system.controller,
+                                     {**parts, **dict(block.get("options") or {})})
+    return out
+
+
+def controller_name(kind: str, options: Mapping[str, Any] | None = None) -> str:
+    """Canonical text of a method: ``controller`` or ``controller(key=value,...)``.
+
+    The keys are the options the method sets and the parts other than the controller
+    (``estimator=...``) it names. This is the ``controller`` column of results.csv and
+    what the config hash covers; a method without options hashes as its controller alone.
+    """
+    if not options:
+        return kind
+    return f"{kind}({','.join(f'{k}={options[k]}' for k in sorted(options))})"
+
+
+def method_system(controller: str) -> dict[str, Any]:
+    """The ``Scenario.with_system`` changes of a method text (:func:`controller_name`).
+
+    Values come back as text, so options are converted by their specs (``SystemConfig``
+    checks them); ``rho_max=2.5`` becomes 2.5.
+    """
+    kind, _, rest = controller.partition("(")
+    items = dict(item.split("=", 1) for item in rest.rstrip(")").split(",")) if rest else {}
+    changes: dict[str, Any] = {"controller": kind}
+    options: dict[str, Any] = {}
+    for k, v in items.items():
+        if k in ROLES:
+            changes[k] = v
+        else:
+            options[k] = _option_value(v)
+    changes["options"] = options
+    return changes
+
+
+def _option_value(text: str) -> Any:
+    for convert in (int, float):
+        try:
+            return convert(text)
+        except ValueError:
+            pass
+    return {"True": True, "False": False}.get(text, text)
+
+
+def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
+    """Check the types of the overridable keys present in ``doc``; returns them parsed."""
+    out: dict[str, Any] = {}
+    for k, v in doc.items():
+        key = f"{prefix}{k}"
+        if k in ("figure", "description"):
+            out[k] = _str(where, key, v)
+        elif k == "methods":
+            out[k] = _methods(where, key, v)
+        elif k == "robots":
+            out[k] = _list(where, key, v, lambda n, x: _int(where, f"{prefix}{n}", x, 1))
+        elif k == "targets":
+            out[k] = _list(where, key, v, lambda n, x: _int(where, f"{prefix}{n}", x, 0))
+        elif k == "resolutions":
+            out[k] = _list(where, key, v,
+                           lambda n, x: _number(where, f"{prefix}{n}", x, 0.0, True))
+        elif k == "trials":
+            out[k] = _int(where, key, v, 1)
+        elif k == "base_seed":
+            out[k] = _int(where, key, v, 0)
+        elif k == "duration":
+            out[k] = _number(where, key, v, 0.0, True)
+        elif k == "metric":
+            if v not in METRICS:
+                raise _fail(where, key, f"expected one of {list(METRICS)}, got {v!r}")
+            out[k] = v
+        elif k == "engine":
+            if v not in ENGINES:
+                raise _fail(where, key, f"expected one of {list(ENGINES)}, got {v!r}")
+            out[k] = v
+        elif k == "window":
+            w = _list(where, key, v, lambda n, x: _number(where, f"{prefix}{n}", x, 0.0,
+                                                          False))
+            if len(w) != 2 or not w[1] > w[0]:
+                raise _fail(where, key, f"expected [start, end] in seconds with end > start, "
+                                        f"got {list(v)}")
+            out[k] = (w[0], w[1])
+        elif k == "scenario":
+            sc = _mapping(where, key, v, None)
+            for name in sc:
+                if name in AXIS_FIELDS:
+                    raise _fail(where, f"{key}.{name}", "set by the sweep; use the top-level "
+                                                        "keys robots / resolutions / "
+                                                        "duration / base_seed instead")
+            if isinstance(sc.get("targets"), Mapping) and "count" in sc["targets"]:
+                raise _fail(where, f"{key}.targets.count", "set by the sweep; use the "
+                                                           "top-level key targets instead")
+            out[k] = dict(sc)
+    return out
+
+
+def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) -> SweepSpec:
+    """Read and validate a spec file; ``quick`` applies its ``quick:`` block.
+
+    ``engine`` (one of :data:`ENGINES`), when given, replaces the spec's ``engine``.
+
+    Every trial's scenario is built once here, for the full and the quick form, so a bad
+    value fails before anything runs.
+
+    Raises
+    ------
+    SpecError
+        Unreadable file, YAML error, unknown key, wrong type, empty list, unknown preset or
+        method, a window outside the run, or a scenario the presets reject; the message
+        names the file and the key.
+    """
+    path = Path(path)
+    where = str(path)
+    try:
+        doc = read_yaml(path, "sweep spec")
+    except ValueError as exc:
+        raise SpecError(str(exc)) from None
+    if doc is None:
+        doc = {}
+    _mapping(where, "", doc, TOP_KEYS)
+    if "preset" not in doc:
+        raise _fail(where, "preset", f"missing; expected one of {sorted(PRESETS)}")
+    preset = _str(where, "preset", doc["preset"])
+    if preset not in PRESETS:
+        raise _fail(where, "preset", f"unknown preset {preset!r}; expected one of "
+                                     f"{sorted(PRESETS)}")
+    name = _str(where, "name", doc.get("name", path.stem))
+    if not _LABEL.match(name):
+        raise _fail(where, "name", "must be letters, digits and underscores")
+    _load_spec_plugins(where, doc, path.parent)
+    full = _form(where, doc, "")
+    for key in ("methods", "robots", "trials"):
+        if key not in full:
+            raise _fail(where, key, "missing")
+    form = dict(full)
+    qkeys: set[str] = set()
+    if "quick" in doc:
+        q = _mapping(where, "quick", doc["quick"], OVERRIDABLE)
+        qform = _form(where, q, "quick.")
+        if quick:
+            if "scenario" in qform:
+                qform["scenario"] = {**form.get("scenario", {}), **qform["scenario"]}
+            form.update(qform)
+            qkeys = set(qform)
+    elif quick:
+        raise _fail(where, "quick", "missing: this spec has no quick form")
+    if "quick" in doc and not quick:
+        # Check the quick form too, so a spec is known good in both forms.
+        load_spec(path, quick=True)
+    if engine is not None:
+        if engine not in ENGINES:
+            raise SpecError(f"engine: expected one of {list(ENGINES)}, got {engine!r}")
+        form["engine"] = engine
+    return _resolve(where, name, path, quick, preset, form, qkeys)
+
+
+def _load_spec_plugins(where: str, doc: Mapping[str, Any], base: Path) -> None:
+    """Import ``scenario.system.plugins`` first, so that methods may name their parts."""
+    scen = doc.get("scenario")
+    system = scen.get("system") if isinstance(scen, Mapping) else None
+    if not isinstance(system, Mapping) or "plugins" not in system:
+        return
+    try:
+        SystemConfig.from_dict({"plugins": system["plugins"]}, "scenario.system", base)
+    except ValueError as exc:
+        raise SpecError(f"{where}: {exc}") from None
+
+
+def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
+             form: dict[str, Any], qkeys: set[str]) -> SweepSpec:
+    def key(k: str) -> str:
+        return f"quick.{k}" if k in qkeys else k
+
+    base_sc = PRESETS[preset]()
+    scen = form.get("scenario", {})
+    try:
+        base = scenario_from_dict({"preset": preset, **scen}, where="scenario",
+                                  base_dir=path.parent)
+    except ValueError as exc:
+        raise SpecError(f"{where}: {exc}") from None
+    duration = form.get("duration", base.duration)
+    try:
+        base = base.with_overrides(duration=duration)
+    except ValueError as exc:
+        raise _fail(where, key("duration"), str(exc)) from None
+    targets = form.get("targets", (base.targets.count,))
+    resolutions = form.get("resolutions", (base_sc.resolution,))
+    for i, r in enumerate(resolutions):
+        try:
+            base.with_overrides(resolution=r)
+        except ValueError as exc:
+            raise _fail(where, f"{key('resolutions')}[{i}]", str(exc)) from None
+    for i, n in enumerate(targets):
+        try:
+            _with_count(base, n)
+        except ValueError as exc:
+            raise _fail(where, f"{key('targets')}[{i}]", str(exc)) from None
+    metric = form.get("metric", "final")
+    window = form.get("window")
+    if window is None:
+        if metric != "final":
+            raise _fail(where, key("window"), f"required for metric {metric!r}")
+        window = (0.0, float(duration))
+    steps = base.steps
+    times = [k * base.dt for k in range(steps)]
+    if not any(window[0] <= t <= window[1] for t in times):
+        raise _fail(where, key("window"), f"[{window[0]:g}, {window[1]:g}] s holds no step "
+                                          f"of a {duration:g} s run")
+    spec = SweepSpec(
+        name=name, path=path, quick=quick, preset=preset,
+        figure=form.get("figure", name), description=form.get("description", ""),
+        methods=form["methods"], robots=form["robots"], targets=tuple(targets),
+        resolutions=tuple(float(r) for r in resolutions), trials=form["trials"],
+        base_seed=form.get("base_seed", 0), duration=float(duration), metric=metric,
+        window=(float(window[0]), float(window[1])), scenario=scen,
+        engine=form.get("engine", "central"))
+    try:
+        spec.trials_list()
+    except ValueError as exc:
+        raise SpecError(f"{where}: {exc}") from None
+    return spec
+
+
+__all__ = ["ENGINES", "METRICS", "SpecError", "SweepSpec", "Trial", "config_hash", "find_spec",
+           "load_spec", "sweeps_dir"]

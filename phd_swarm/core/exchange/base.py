@@ -1,0 +1,79 @@
+"""The exchange role: what robots tell each other, as a transport-agnostic state machine.
+
+An exchange participant never calls a transport. The agent (:mod:`phd_swarm.core.agent`)
+hands it the world's membership and the robot's scan, feeds it the messages that arrive and
+a tick for every round (tick period) without news, and sends the :class:`Envelope` s it
+returns; the in-memory engine delivers them through a queue, the ROS robot node publishes
+them on the receivers' inbox topics (:mod:`phd_swarm.nodes.wire`). A robot's exchange is
+done with a step when :attr:`Exchange.done`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any, NamedTuple
+
+import numpy as np
+
+
+class Envelope(NamedTuple):
+    """A message addressed to robot ``dst`` by robot ``src``.
+
+    A named tuple, not a dataclass: the engine creates ~10^4 per step, and a tuple is
+    several times cheaper to build.
+    """
+
+    src: int
+    dst: int
+    msg: Any
+
+    def __repr__(self) -> str:
+        return f"Envelope(src={self.src}, dst={self.dst}, msg={type(self.msg).__name__})"
+
+
+class Exchange(ABC):
+    """One robot's side of an exchange (see the module docstring).
+
+    Every method that may produce messages returns them as a list of :class:`Envelope`.
+    """
+
+    @abstractmethod
+    def initialise(self, ids: np.ndarray, positions: np.ndarray) -> None:
+        """The team's configuration at the start (ids (R,), positions (R, 2) [m])."""
+
+    @abstractmethod
+    def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
+                     alive: np.ndarray) -> None:
+        """The world's membership at the start of ``step`` (who died, who came back)."""
+
+    @abstractmethod
+    def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
+               alive: np.ndarray) -> None:
+        """Come back into the team at ``step`` after being counted dead."""
+
+    @abstractmethod
+    def start_step(self, step: int, position: np.ndarray, power_weight: float,
+                   z: np.ndarray) -> list[Envelope]:
+        """Start ``step`` at ``position`` with measurement set ``z`` (M, 2)."""
+
+    @abstractmethod
+    def receive(self, msg: Any) -> bool:
+        """Take one message in; True if it is news (not a repeat or a keep-alive)."""
+
+    @abstractmethod
+    def advance(self) -> list[Envelope]:
+        """Go as far as the messages received allow."""
+
+    @abstractmethod
+    def tick(self) -> list[Envelope]:
+        """One round without progress: keep-alives, timeouts."""
+
+    @property
+    @abstractmethod
+    def done(self) -> bool:
+        """Whether the current step is finished."""
+
+    @property
+    @abstractmethod
+    def step(self) -> int:
+        """The current (or last) step."""

@@ -1,5 +1,0 @@
-"""The error of the distributed filter (:mod:`phd_swarm.core.protocol`)."""
-
-
-class ProtocolError(RuntimeError):
-    """An invariant of the distributed filter was violated (a bug or inconsistent views)."""

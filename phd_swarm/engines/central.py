@@ -1,0 +1,192 @@
+"""The central engine: the team's filter and controllers computed as one, for sweeps.
+
+The distributed filter (Dames 2020 Alg. 1-2) computes the centralised grid PHD filter's
+team PHD (eq. 3-6), up to the rounding of sums taken in another order
+(``test/engines/test_distributed.py``): what each robot holds is the team PHD over its own cell. So
+a run of the papers' algorithms can be computed without the protocol, as the papers' own
+simulations are: one :class:`~phd_swarm.core.central.CentralPhdFilter` over the whole map,
+one partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of
+Dames eq. 7 when every power weight is 0), and each robot's controller (the same
+registered controller objects and generators the agents have,
+:mod:`phd_swarm.core.controllers`) on its own cell, bins and masses. It runs the systems
+whose estimator has a central form (``grid_phd``) and whose exchange partitions the map
+(``voronoi_phd``); other systems run on the distributed engine. Chen's
+cumulative state (eq. 9-10) is counted per bin: alpha and n are whole numbers, so they are
+exactly those the robots carry.
+
+One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
+
+1. the world gives each live robot its measurement set Z^k at its position q^k;
+2. the cells of q^k with the power weights of the previous decisions partition the bins
+   (ties to the lower robot id, as in :func:`~phd_swarm.core.partition.assign_bins`);
+3. the filter predicts (eq. 3; per cell when the motion kernel is convolved by FFT, see
+   :meth:`CentralEngine._predict_per_cell`) and updates with the sets in increasing robot
+   id (eq. 4-6, Alg. 2 line 10); every scan counts one observation of the bins in its
+   field of view, and a reward there if it holds a measurement (Chen eq. 9-10); each
+   robot decides its goal and next power weight on its own bins;
+4. the world moves the robots toward their goals and the targets, to step k+1.
+
+What it leaves out is what only the protocol has: messages, failures and the counters of
+partitions that disagree (a missed neighbour, docs/protocol.md). It runs a step several
+times faster than the distributed engine; ``test/engines/test_central.py`` shows that
+both give the same team PHD and the same robot paths.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+
+from phd_swarm.core import phd_grid
+from phd_swarm.core.agent import Team, robot_generator
+from phd_swarm.core.controllers.base import CellDensity, Knowledge
+from phd_swarm.core.cumulative import observe_scans
+from phd_swarm.core.partition import bin_owners, cell_of
+from phd_swarm.core.scan import Scan
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.world import World
+
+
+class CentralEngine:
+    """Run a scenario with one central filter and the robots' controllers, in one process.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Map, models, team, targets, duration, seed, and the system (``scenario.system``).
+    controller : str, optional
+        Shorthand for ``scenario.with_system(controller=...)``.
+
+    Raises
+    ------
+    ValueError
+        If the system has no central form (see the module docstring).
+    """
+
+    def __init__(self, scenario: Scenario, controller: str | None = None) -> None:
+        if controller is not None:
+            scenario = scenario.with_system(controller=controller)
+        self.scenario = scenario
+        self.grid = scenario.grid
+        team = Team.build(scenario)
+        central = team.parts["estimator"].extras.get("central")
+        if central is None or "cell" not in team.parts["exchange"].provides:
+            raise ValueError(f"the central engine needs an estimator with a central form and "
+                             f"an exchange that partitions the map; system "
+                             f"{scenario.system.label()} has "
+                             f"{scenario.system.estimator}/{scenario.system.exchange}: use "
+                             f"the distributed engine")
+        self.world = World(scenario)
+        self.filter = central(scenario)
+        ids = self.world.robot_ids
+        self.controllers = [team.make("controller", int(i)) for i in ids]
+        self.rngs = [robot_generator(scenario.seed, int(i)) for i in ids]
+        self.power_weights = np.zeros(len(ids))
+        self.cumulative = "cumulative" in team.parts["controller"].requires
+        self.alpha = np.zeros(self.grid.size) if self.cumulative else None
+        self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
+        self.owners = np.empty(0, dtype=np.int64)
+        self._generators = (np.empty((0, 2)), np.empty(0))
+        kernel = self.filter.kernel
+        self._per_cell_prediction = kernel.size > phd_grid.DIRECT_MAX_TAPS
+        self._survival = self.filter.ps_img.reshape(-1)
+        self._birth = self.filter.birth_img.reshape(-1)
+        self.goals = np.empty((0, 2))
+
+    @property
+    def step_index(self) -> int:
+        """Index of the next step to run."""
+        return self.world.step_index
+
+    def step(self) -> None:
+        """Run one full step (scan, filter, partition and control, world motion)."""
+        world, grid = self.world, self.grid
+        k = world.step_index
+        scans = world.scans()
+        ids = world.robot_ids
+        positions = world.robot_positions
+        empty = np.empty((0, 2))
+        ordered = [Scan(int(rid), k, positions[r], scans.get(int(rid), empty))
+                   for r, rid in enumerate(ids.tolist()) if int(rid) in scans]
+        rho = self.power_weights.copy()
+        self._generators = (positions.copy(), rho)
+        self.owners = bin_owners(grid, positions, rho)
+        order = np.argsort(self.owners, kind="stable")
+        starts = np.searchsorted(self.owners[order], np.arange(len(ids) + 1))
+        if self._per_cell_prediction:
+            self._predict_per_cell(order, starts)
+        else:
+            self.filter.predict()
+        self.filter.update_all(ordered)
+        if self.cumulative:
+            observe_scans(grid, self.scenario.models.detection.radius, self.alpha, self.count,
+                          ((scan.sensor, scan.z) for scan in ordered))
+        w = self.filter.weights.reshape(-1)
+        goals = {}
+        goal_rows = np.empty((len(ids), 2))
+        for r, rid in enumerate(ids.tolist()):
+            rid = int(rid)
+            if rid not in scans:
+                goal_rows[r] = positions[r]
+                continue
+            bins = order[starts[r]:starts[r + 1]]
+            # The polygon is only needed where the weights of the bins are all 0 (the
+            # centroid's fallback): computed then.
+            local = CellDensity(grid, partial(self.cell, r), bins, w[bins],
+                                None if self.alpha is None else self.alpha[bins],
+                                None if self.count is None else self.count[bins])
+            d = self.controllers[r].decide(Knowledge(rid, k, positions[r], scans[rid], local),
+                                           self.rngs[r])
+            goals[rid] = d.goal
+            goal_rows[r] = d.goal
+            self.power_weights[r] = d.power_weight
+        self.goals = goal_rows
+        world.apply_goals(goals)
+        world.advance()
+
+    def _predict_per_cell(self, order: np.ndarray, starts: np.ndarray) -> None:
+        """Eq. 3 as the robots compute it: each cell's bins spread in their own box.
+
+        With a kernel that :func:`~phd_swarm.core.phd_grid.convolve_mass` applies by FFT
+        (Chen's at 0.1 m), the round-off is ~1e-16 of the largest mass in the convolved
+        box. In a searched-out cell every mass can lie below the round-off of a whole-map
+        FFT, and the centroid of that cell would follow it; the robots convolve their own
+        bins only (:func:`~phd_swarm.core.phd_grid.spread`), so their round-off is that of
+        their own masses. Spreading each cell's bins the same way keeps the two engines'
+        robots together (test/engines/test_central.py). Sums are the same up to the
+        order of the additions.
+        """
+        grid, kernel = self.grid, self.filter.kernel
+        w = self.filter.weights.reshape(-1)
+        out = np.zeros(grid.size)
+        for r in range(len(starts) - 1):
+            bins = order[starts[r]:starts[r + 1]]
+            if bins.size:
+                flat, moved = phd_grid.spread(grid, bins, self._survival[bins] * w[bins],
+                                              kernel)
+                out[flat] += moved
+        self.filter.weights = (out + self._birth).reshape(grid.shape)
+
+    def cell(self, row: int) -> np.ndarray:
+        """The cell polygon (V, 2) of the robot in ``row`` at the last step.
+
+        A power cell (Chen eq. 12-13), or a Voronoi cell (Dames eq. 7) when every power
+        weight is 0; (0, 2) if empty.
+        """
+        positions, rho = self._generators
+        return cell_of(self.scenario.grid.env, row, positions, rho)[0]
+
+    def run(self, steps: int | None = None) -> None:
+        """Run ``steps`` steps (default: the rest of the scenario)."""
+        n = self.scenario.steps - self.world.step_index if steps is None else steps
+        for _ in range(n):
+            self.step()
+
+    def counters(self) -> dict[str, int]:
+        """Protocol counters: none (there is no protocol), for the engines' one interface."""
+        return {}
+
+    def team_weights(self) -> np.ndarray:
+        """The team PHD as an image (ny, nx)."""
+        return np.array(self.filter.weights)

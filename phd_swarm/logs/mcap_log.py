@@ -1,0 +1,757 @@
+"""MCAP run logs written and read the way rosbag2's MCAP storage does (no rclpy needed).
+
+A log is an MCAP file with profile ``ros2``; each topic is a channel with message encoding
+``cdr`` (the bytes of a ``raw=True`` subscription: the 4-byte CDR encapsulation header and the
+payload) and a ``ros2msg`` schema named ``pkg/msg/Type``. The schema text is the type's
+``.msg`` file followed, once per nested type, by a line of 80 ``=``, a line ``MSG: pkg/Type``
+and that type's ``.msg`` file, so decoders without the ROS type support
+(``mcap_ros2.decoder.DecoderFactory``, Foxglove) can decode nested fields
+(rosbag2 ``docs/message_definition_encoding.md``). Channel metadata holds
+``offered_qos_profiles`` in the YAML that Jazzy's rosbag2 writes (policy names as strings)
+and ``topic_type_hash`` (the RIHS01 hash rosidl installs next to the ``.msg`` file).
+Log time is when a message was received, publish time when it was sent; see
+:mod:`phd_swarm.nodes.recorder` for the clocks the recorder uses.
+
+Crash safety: the writer hands every finished chunk to the operating system at once (no
+buffering in the process), so a recorder killed with SIGKILL leaves a file whose complete
+chunks can be read. Such a file has no summary and no footer; the reader then scans the
+records in file order up to the last complete one, sets :attr:`LogReader.truncated` and
+logs a warning on the ``phd_swarm.logs.mcap_log`` logger.
+"""
+
+from __future__ import annotations
+
+import functools
+import io
+import json
+import logging
+import os
+import re
+import struct
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mcap.data_stream import ReadDataStream
+from mcap.exceptions import McapError
+from mcap.opcode import Opcode
+from mcap.reader import make_reader
+from mcap.records import Channel, Chunk, DataEnd, Footer, Header, Message, Metadata, Schema
+from mcap.stream_reader import breakup_chunk
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+from mcap_ros2.decoder import DecoderFactory
+
+from phd_swarm import __version__
+
+logger = logging.getLogger(__name__)
+
+#: MCAP profile, schema encoding and message encoding of a ROS 2 log.
+PROFILE = "ros2"
+SCHEMA_ENCODING = "ros2msg"
+MESSAGE_ENCODING = "cdr"
+
+#: The 8 bytes that open and close every MCAP file.
+MAGIC = b"\x89MCAP0\r\n"
+
+#: Line between the definitions of a ``ros2msg`` schema.
+SEPARATOR = "=" * 80
+
+_COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
+                "none": CompressionType.NONE}
+
+_PRIMITIVES = frozenset({
+    "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
+    "int32", "uint32", "int64", "uint64", "string", "wstring",
+})
+
+_TYPE_NAME = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:msg/)?([A-Za-z][A-Za-z0-9_]*)$")
+
+
+class LogError(Exception):
+    """A log cannot be read or written; the message names the file and the problem."""
+
+
+class DefinitionNotFoundError(LookupError):
+    """No ``.msg`` file for a message type among the installed packages."""
+
+
+# ------------------------------------------------------------------------ schemas
+def _split_type(ros_type: str) -> tuple[str, str]:
+    """``pkg/msg/Type`` or ``pkg/Type`` -> ``(pkg, Type)``."""
+    match = _TYPE_NAME.match(ros_type)
+    if match is None:
+        raise DefinitionNotFoundError(
+            f"{ros_type!r} is not a message type name (expected pkg/msg/Type or pkg/Type)")
+    return match.group(1), match.group(2)
+
+
+@functools.cache
+def _share_dir(package: str) -> Path:
+    from ament_index_python.packages import (
+        PackageNotFoundError,
+        get_package_share_directory,
+    )
+
+    try:
+        return Path(get_package_share_directory(package))
+    except PackageNotFoundError:
+        raise DefinitionNotFoundError(
+            f"package {package!r} is not installed (not in AMENT_PREFIX_PATH)") from None
+
+
+@functools.cache
+def _msg_text(package: str, name: str) -> str:
+    path = _share_dir(package) / "msg" / f"{name}.msg"
+    try:
+        return path.read_text()
+    except OSError:
+        raise DefinitionNotFoundError(f"no definition of {package}/msg/{name}: {path} "
+                                      "cannot be read") from None
+
+
+def _has_msg(package: str, name: str) -> bool:
+    try:
+        return (_share_dir(package) / "msg" / f"{name}.msg").is_file()
+    except DefinitionNotFoundError:
+        return False
+
+
+def _dependencies(text: str, package: str) -> list[str]:
+    """Nested types (``pkg/Type``) of the fields in ``.msg`` text, sorted, each once.
+
+    The type is the first word of a non-comment line, with any array suffix (``[]``,
+    ``[<=N]``, ``[N]``) and string bound (``<=N``) removed; a name without a package is in
+    ``package``. A bare ``Header`` is ``std_msgs/Header`` (the ROS 1 shorthand, which
+    ROS 2's rosidl does not know) unless ``package`` has a ``Header`` of its own. Constants
+    have primitive types and so add nothing.
+    """
+    deps = set()
+    for line in text.splitlines():
+        words = line.split("#", 1)[0].split()
+        if not words:
+            continue
+        base = words[0].split("[", 1)[0].split("<=", 1)[0]
+        if base in _PRIMITIVES:
+            continue
+        if base == "Header" and not _has_msg(package, "Header"):
+            deps.add("std_msgs/Header")
+        elif "/" in base:
+            pkg, name = _split_type(base)
+            deps.add(f"{pkg}/{name}")
+        else:
+            deps.add(f"{package}/{base}")
+    return sorted(deps)
+
+
+@functools.cache
+def message_definition(ros_type: str) -> str:
+    """The ``ros2msg`` schema text of ``ros_type`` (``pkg/msg/Type``) as rosbag2 writes it.
+
+    The type's ``.msg`` text, then for each nested type, depth first in sorted order and
+    each once: a newline, a line of 80 ``=``, a line ``MSG: pkg/Type`` and that type's
+    ``.msg`` text. Files are found with ``ament_index_python`` in
+    ``<share>/<pkg>/msg/<Type>.msg``.
+
+    Raises
+    ------
+    DefinitionNotFoundError
+        If the package or one of the ``.msg`` files is not installed.
+    """
+    package, name = _split_type(ros_type)
+    seen: set[str] = set()
+
+    def append(pkg: str, typ: str, depth: int) -> str:
+        if depth <= 0:
+            raise DefinitionNotFoundError(f"{ros_type}: nesting deeper than 50 types")
+        text = _msg_text(pkg, typ)
+        parts = [text]
+        for dep in _dependencies(text, pkg):
+            if dep in seen:
+                continue
+            seen.add(dep)
+            dep_pkg, dep_name = dep.split("/")
+            parts.append(f"\n{SEPARATOR}\nMSG: {dep}\n" + append(dep_pkg, dep_name, depth - 1))
+        return "".join(parts)
+
+    return append(package, name, 50)
+
+
+@functools.cache
+def installed_type_hash(ros_type: str) -> str | None:
+    """The RIHS01 type hash of ``ros_type`` from rosidl's ``<Type>.json``, or None."""
+    package, name = _split_type(ros_type)
+    try:
+        path = _share_dir(package) / "msg" / f"{name}.json"
+        doc = json.loads(path.read_text())
+    except (DefinitionNotFoundError, OSError, ValueError):
+        return None
+    for entry in doc.get("type_hashes", ()):
+        if entry.get("type_name") == f"{package}/msg/{name}":
+            return entry.get("hash_string")
+    return None
+
+
+# ------------------------------------------------------------------------ QoS
+_HISTORY = {0: "system_default", 1: "keep_last", 2: "keep_all", 3: "unknown"}
+_RELIABILITY = {0: "system_default", 1: "reliable", 2: "best_effort", 3: "unknown",
+                4: "best_available"}
+_DURABILITY = {0: "system_default", 1: "transient_local", 2: "volatile", 3: "unknown",
+               4: "best_available"}
+_LIVELINESS = {0: "system_default", 1: "automatic", 2: "manual_by_node",
+               3: "manual_by_topic", 4: "unknown", 5: "best_available"}
+
+
+def _policy(value: Any, names: Mapping[int, str]) -> str:
+    return names.get(int(getattr(value, "value", value)), "unknown")
+
+
+def _duration(value: Any) -> tuple[int, int]:
+    """(sec, nsec) of an rclpy Duration (``.nanoseconds``) or a number of nanoseconds."""
+    ns = int(getattr(value, "nanoseconds", value or 0))
+    return ns // 1_000_000_000, ns % 1_000_000_000
+
+
+def qos_yaml(profile: Any) -> str:
+    """``profile`` as one entry of rosbag2's ``offered_qos_profiles`` YAML list.
+
+    ``profile`` is duck-typed like ``rclpy.qos.QoSProfile``: ``history``, ``depth``,
+    ``reliability``, ``durability`` (enums with ``.value``, or ints) and optionally
+    ``deadline``, ``lifespan``, ``liveliness``, ``liveliness_lease_duration`` (Durations
+    with ``.nanoseconds``, or ints [ns]) and ``avoid_ros_namespace_conventions``. Policies
+    are written by name (``keep_last``, ``reliable``, ...) as Jazzy's rosbag2 does
+    (metadata version 9), in the layout of yaml-cpp's ``Dump``. Profiles of several
+    publishers make a longer list when their texts are joined with a newline.
+    """
+    lines = [
+        f"- history: {_policy(profile.history, _HISTORY)}",
+        f"  depth: {int(profile.depth)}",
+        f"  reliability: {_policy(profile.reliability, _RELIABILITY)}",
+        f"  durability: {_policy(profile.durability, _DURABILITY)}",
+    ]
+    for key in ("deadline", "lifespan"):
+        sec, nsec = _duration(getattr(profile, key, 0))
+        lines += [f"  {key}:", f"    sec: {sec}", f"    nsec: {nsec}"]
+    lines.append(f"  liveliness: {_policy(getattr(profile, 'liveliness', 0), _LIVELINESS)}")
+    sec, nsec = _duration(getattr(profile, "liveliness_lease_duration", 0))
+    lines += ["  liveliness_lease_duration:", f"    sec: {sec}", f"    nsec: {nsec}"]
+    avoid = bool(getattr(profile, "avoid_ros_namespace_conventions", False))
+    lines.append(f"  avoid_ros_namespace_conventions: {'true' if avoid else 'false'}")
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------ writing
+class _DirectFile:
+    """A write-only file without a user-space buffer.
+
+    ``mcap.writer.Writer`` wraps raw files in a ``BufferedWriter``; this object is not a
+    ``RawIOBase``, so every ``write`` (one per finished chunk, with its message indexes)
+    reaches the operating system at once and survives a SIGKILL of the process.
+    """
+
+    def __init__(self, path: Path) -> None:
+        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self._pos = 0
+
+    def write(self, data: bytes) -> int:
+        view = memoryview(data)
+        while view:
+            n = os.write(self._fd, view)
+            view = view[n:]
+        self._pos += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self._pos
+
+    def flush(self) -> None:
+        """Nothing is buffered here."""
+
+    def close(self) -> None:
+        if self._fd >= 0:
+            os.close(self._fd)
+            self._fd = -1
+
+
+class LogWriter:
+    """Writes a ROS 2 MCAP log: chunked, compressed, indexed, readable after a crash.
+
+    Parameters
+    ----------
+    path : str or Path
+        File to create (replaced if it exists).
+    compression : {"zstd", "lz4", "none"}
+        Chunk compression.
+    chunk_size : int
+        Uncompressed bytes after which a chunk is finished and written [bytes]. A crash
+        loses at most the chunk in progress.
+
+    Notes
+    -----
+    Use as a context manager, or call :meth:`close`, which writes the summary (schemas,
+    channels, statistics, chunk and metadata indexes) and the footer. Not thread-safe: call
+    it from one thread (the recorder's executor).
+    """
+
+    def __init__(self, path: str | Path, compression: str = "zstd",
+                 chunk_size: int = 1 << 20) -> None:
+        if compression not in _COMPRESSION:
+            raise ValueError(f"compression must be one of {sorted(_COMPRESSION)}, "
+                             f"got {compression!r}")
+        if int(chunk_size) < 1:
+            raise ValueError(f"chunk_size must be positive, got {chunk_size!r}")
+        self.path = Path(path)
+        try:
+            self._file = _DirectFile(self.path)
+        except OSError as exc:
+            raise LogError(f"{self.path}: cannot create the log: {exc.strerror}") from None
+        self._writer = Writer(self._file, chunk_size=int(chunk_size),
+                              compression=_COMPRESSION[compression])
+        self._writer.start(PROFILE, f"phd_swarm/{__version__} {LIBRARY_IDENTIFIER}")
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._closed = False
+        #: Messages written so far.
+        self.message_count = 0
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has been called."""
+        return self._closed
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """Topics with a channel, in the order they were added."""
+        return tuple(self._channels)
+
+    def add_channel(self, topic: str, ros_type: str, offered_qos_yaml: str = "",
+                    type_hash: str | None = None) -> int:
+        """Add the channel of ``topic`` (type ``pkg/msg/Type``); returns its channel id.
+
+        Idempotent per topic: a second call returns the first channel and ignores its
+        arguments. ``offered_qos_yaml`` is the publishers' QoS (:func:`qos_yaml`);
+        ``type_hash`` (``RIHS01_...``) defaults to the hash rosidl installed for the type
+        (:func:`installed_type_hash`).
+
+        Raises
+        ------
+        DefinitionNotFoundError
+            If the type's ``.msg`` definition is not installed.
+        """
+        self._check_open()
+        if topic in self._channels:
+            return self._channels[topic]
+        schema_id = self._schemas.get(ros_type)
+        if schema_id is None:
+            text = message_definition(ros_type)
+            schema_id = self._writer.register_schema(ros_type, SCHEMA_ENCODING, text.encode())
+            self._schemas[ros_type] = schema_id
+        metadata = {"offered_qos_profiles": offered_qos_yaml}
+        digest = type_hash if type_hash is not None else installed_type_hash(ros_type)
+        if digest:
+            metadata["topic_type_hash"] = digest
+        channel_id = self._writer.register_channel(topic, MESSAGE_ENCODING, schema_id, metadata)
+        self._channels[topic] = channel_id
+        return channel_id
+
+    def write(self, topic: str, cdr: bytes, log_time_ns: int, publish_time_ns: int) -> None:
+        """Append one CDR-serialised message of ``topic`` (added with :meth:`add_channel`).
+
+        Times are nanoseconds since the epoch of their clock, >= 0.
+        """
+        if self._closed:
+            raise LogError(f"{self.path}: write after close")
+        self._writer.add_message(self._channels[topic], log_time_ns, cdr, publish_time_ns)
+        self.message_count += 1
+
+    def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
+        """Store a metadata record ``name`` with string keys and values."""
+        self._check_open()
+        bad = [k for k, v in data.items() if not isinstance(k, str) or not isinstance(v, str)]
+        if bad:
+            raise TypeError(f"metadata {name!r}: keys and values must be str; bad key(s) "
+                            f"{bad}")
+        self._writer.add_metadata(name, dict(data))
+
+    def close(self) -> None:
+        """Finish the last chunk, write the summary and footer, close the file (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._writer.finish()
+        finally:
+            self._file.close()
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise LogError(f"{self.path}: the log is closed")
+
+    def __enter__(self) -> LogWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+# ------------------------------------------------------------------------ reading
+@dataclass(frozen=True)
+class LogRecord:
+    """One message of a log.
+
+    Attributes
+    ----------
+    topic, ros_type : str
+        Channel topic and message type (``pkg/msg/Type``).
+    log_time_ns, publish_time_ns : int
+        Receive and publish time [ns] (see the recorder for their clocks).
+    data : bytes
+        The CDR bytes, as ``rclpy.serialization.deserialize_message`` takes them.
+    msg : object or None
+        The message decoded by ``mcap_ros2`` (attribute access like the ROS message), or
+        None when read with ``decode=False``.
+    """
+
+    topic: str
+    ros_type: str
+    log_time_ns: int
+    publish_time_ns: int
+    data: bytes
+    msg: Any = None
+
+
+@dataclass(frozen=True)
+class TopicSummary:
+    """Messages of one topic: count and first/last log time [ns] (None if no message)."""
+
+    topic: str
+    ros_type: str
+    message_count: int
+    start_ns: int | None
+    end_ns: int | None
+
+
+@dataclass(frozen=True)
+class LogInfo:
+    """What a log holds.
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    library : str
+        Writer library recorded in the MCAP header.
+    truncated : bool
+        True if the file has no valid summary and footer (a writer that was killed or is
+        still writing, or cut bytes); the counts are then those of the complete records.
+    message_count : int
+        Messages in the log.
+    start_ns, end_ns : int or None
+        First and last log time [ns] over all topics.
+    topics : dict
+        Topic -> :class:`TopicSummary`, for every channel (also those without messages).
+    """
+
+    path: str
+    library: str
+    truncated: bool
+    message_count: int
+    start_ns: int | None
+    end_ns: int | None
+    topics: dict[str, TopicSummary]
+
+
+class _Scan:
+    """Records of an MCAP file in file order, stopping quietly at the first incomplete one.
+
+    Each record's length is checked against the file size before it is read, chunks are
+    checked against their CRC, and anything that fails ends the scan with ``stopped`` set to
+    the reason; the data section's end (DataEnd) ends it normally.
+    """
+
+    def __init__(self, stream: io.BufferedReader, size: int) -> None:
+        self._stream = stream
+        self._size = size
+        self.stopped: str | None = None
+
+    def records(self) -> Iterator[Any]:
+        pos = len(MAGIC)
+        stream = self._stream
+        while True:
+            if pos + 9 > self._size:
+                self.stopped = f"file ends inside a record header at byte {pos}"
+                return
+            stream.seek(pos)
+            opcode, length = struct.unpack("<BQ", stream.read(9))
+            if opcode == 0 or pos + 9 + length > self._size:
+                self.stopped = f"incomplete record at byte {pos}"
+                return
+            body = stream.read(length)
+            try:
+                if opcode == Opcode.CHUNK:
+                    chunk = Chunk.read(ReadDataStream(io.BytesIO(body)))
+                    records = breakup_chunk(chunk, validate_crc=True)
+                else:
+                    records = [self._parse(opcode, body)]
+            except Exception as exc:  # mcap, struct, zstd and lz4 each raise their own types
+                self.stopped = f"damaged record at byte {pos}: {exc}"
+                return
+            pos += 9 + length
+            for record in records:
+                if isinstance(record, (DataEnd, Footer)):
+                    return
+                if record is not None:
+                    yield record
+
+    @staticmethod
+    def _parse(opcode: int, body: bytes) -> Any:
+        stream = ReadDataStream(io.BytesIO(body))
+        if opcode == Opcode.HEADER:
+            return Header.read(stream)
+        if opcode == Opcode.SCHEMA:
+            return Schema.read(stream)
+        if opcode == Opcode.CHANNEL:
+            return Channel.read(stream)
+        if opcode == Opcode.MESSAGE:
+            return Message.read(stream, len(body))
+        if opcode == Opcode.METADATA:
+            return Metadata.read(stream)
+        if opcode == Opcode.DATA_END:
+            return DataEnd.read(stream)
+        if opcode == Opcode.FOOTER:
+            return Footer.read(stream)
+        return None
+
+
+class LogReader:
+    """An open MCAP log (see :func:`open_log`).
+
+    Attributes
+    ----------
+    path : Path
+        The file.
+    library : str
+        Writer library from the MCAP header.
+    truncated : bool
+        True if the file does not end with a valid footer (a writer that was killed or is
+        still writing, or cut bytes): only the complete records are read, in file order.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        try:
+            self._stream = open(self.path, "rb")  # noqa: SIM115 - closed in close()
+        except FileNotFoundError:
+            raise LogError(f"{self.path}: no such file") from None
+        except OSError as exc:
+            raise LogError(f"{self.path}: cannot open: {exc.strerror}") from None
+        try:
+            self._size = os.fstat(self._stream.fileno()).st_size
+            if self._stream.read(len(MAGIC)) != MAGIC:
+                raise LogError(f"{self.path}: not an MCAP file (bad magic)")
+            header = next(iter(self._scan().records()), None)
+            if not isinstance(header, Header):
+                raise LogError(f"{self.path}: MCAP file cut inside its header record; it "
+                               "holds no messages")
+            if header.profile != PROFILE:
+                raise LogError(f"{self.path}: not a ROS 2 log (MCAP profile "
+                               f"{header.profile!r}, expected {PROFILE!r})")
+            self.library = header.library
+            self.truncated, self._summary = self._read_tail()
+            if self._summary is not None:
+                for channel in self._summary.channels.values():
+                    self._check_channel(channel, self._summary.schemas)
+        except BaseException:
+            self._stream.close()
+            raise
+        if self.truncated:
+            logger.warning("%s: log is truncated (no valid footer: the writer was killed or "
+                           "is still writing); reading its complete records only", self.path)
+        self._decoders = DecoderFactory()
+
+    def _read_tail(self) -> tuple[bool, Any]:
+        """(truncated, summary): summary is None without a (valid) summary section."""
+        if self._size < 2 * len(MAGIC) + 9:
+            return True, None
+        self._stream.seek(self._size - len(MAGIC))
+        if self._stream.read(len(MAGIC)) != MAGIC:
+            return True, None
+        try:
+            self._stream.seek(0)
+            summary = make_reader(self._stream).get_summary()
+        except Exception:  # mcap, struct and OS errors alike mean a damaged tail
+            return True, None
+        return False, summary
+
+    def _check_channel(self, channel: Channel, schemas: Mapping[int, Schema]) -> None:
+        schema = schemas.get(channel.schema_id)
+        if channel.message_encoding != MESSAGE_ENCODING or schema is None \
+                or schema.encoding != SCHEMA_ENCODING:
+            enc = schema.encoding if schema is not None else "none"
+            raise LogError(f"{self.path}: not a ROS 2 CDR log: topic {channel.topic} has "
+                           f"message encoding {channel.message_encoding!r} and schema "
+                           f"encoding {enc!r} (expected {MESSAGE_ENCODING!r} and "
+                           f"{SCHEMA_ENCODING!r})")
+
+    @property
+    def _indexed_ok(self) -> bool:
+        return self._summary is not None and bool(self._summary.chunk_indexes)
+
+    # -------------------------------------------------------------- messages
+    def _scan(self) -> _Scan:
+        self._stream.seek(0)
+        return _Scan(self._stream, self._size)
+
+    def _indexed(self, topics: list[str] | None, start_ns: int | None,
+                 end_ns: int | None) -> Iterator[tuple[Schema, Channel, Message]]:
+        self._stream.seek(0)
+        reader = make_reader(self._stream)
+        yield from reader.iter_messages(topics, log_time_order=True, starting_at=start_ns,
+                                        ending_before=end_ns)
+
+    def _scanned(self, topics: list[str] | None, start_ns: int | None,
+                 end_ns: int | None) -> Iterator[tuple[Schema, Channel, Message]]:
+        schemas: dict[int, Schema] = {}
+        channels: dict[int, Channel] = {}
+        scan = self._scan()
+        for record in scan.records():
+            if isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                self._check_channel(record, schemas)
+                channels[record.id] = record
+            elif isinstance(record, Message):
+                channel = channels.get(record.channel_id)
+                if channel is None:
+                    raise LogError(f"{self.path}: message on channel {record.channel_id} "
+                                   "before the channel's definition")
+                if topics is not None and channel.topic not in topics:
+                    continue
+                if start_ns is not None and record.log_time < start_ns:
+                    continue
+                if end_ns is not None and record.log_time >= end_ns:
+                    continue
+                yield schemas[channel.schema_id], channel, record
+        if scan.stopped:
+            logger.debug("%s: scan stopped: %s", self.path, scan.stopped)
+
+    def messages(self, topics: Iterable[str] | None = None, start_ns: int | None = None,
+                 end_ns: int | None = None, decode: bool = True) -> Iterator[LogRecord]:
+        """Yield the messages with ``start_ns <= log_time < end_ns`` on ``topics`` (all if None).
+
+        A complete log is read through its chunk index in log-time order; a truncated one
+        in file order (which is receive order for the recorder), up to the last complete
+        chunk. ``decode=False`` skips decoding (``msg`` is None), which is much faster.
+
+        Raises
+        ------
+        LogError
+            If a channel is not ROS 2 CDR or a message cannot be decoded.
+        """
+        wanted = None if topics is None else [topics] if isinstance(topics, str) \
+            else list(topics)
+        source = self._indexed if self._indexed_ok else self._scanned
+        try:
+            for schema, channel, message in source(wanted, start_ns, end_ns):
+                msg = self._decode(schema, channel, message) if decode else None
+                yield LogRecord(channel.topic, schema.name, message.log_time,
+                                message.publish_time, message.data, msg)
+        except McapError as exc:
+            raise LogError(f"{self.path}: {exc}") from exc
+
+    def _decode(self, schema: Schema, channel: Channel, message: Message) -> Any:
+        try:
+            decoder = self._decoders.decoder_for(channel.message_encoding, schema)
+            return decoder(message.data)
+        except Exception as exc:  # the generated decoders raise struct, index, value errors
+            raise LogError(f"{self.path}: cannot decode the {schema.name} message on "
+                           f"{channel.topic} logged at {message.log_time} ns: {exc}") from exc
+
+    # -------------------------------------------------------------- metadata, summary
+    def metadata(self) -> dict[str, dict[str, str]]:
+        """Metadata records by name (a later record of the same name replaces an earlier)."""
+        out: dict[str, dict[str, str]] = {}
+        if self._summary is None:
+            records: Iterable[Any] = (r for r in self._scan().records()
+                                      if isinstance(r, Metadata))
+        else:
+            self._stream.seek(0)
+            records = make_reader(self._stream).iter_metadata()
+        try:
+            for record in records:
+                out[record.name] = dict(record.metadata)
+        except McapError as exc:
+            raise LogError(f"{self.path}: {exc}") from exc
+        return out
+
+    def info(self) -> LogInfo:
+        """Per-topic counts and times (reads every chunk, without decoding)."""
+        types: dict[str, str] = {}
+        if self._summary is not None:
+            for channel in self._summary.channels.values():
+                types[channel.topic] = self._summary.schemas[channel.schema_id].name
+        else:
+            schemas: dict[int, Schema] = {}
+            for record in self._scan().records():
+                if isinstance(record, Schema):
+                    schemas[record.id] = record
+                elif isinstance(record, Channel) and record.schema_id in schemas:
+                    types.setdefault(record.topic, schemas[record.schema_id].name)
+        counts = dict.fromkeys(types, 0)
+        first: dict[str, int] = {}
+        last: dict[str, int] = {}
+        for rec in self.messages(decode=False):
+            counts[rec.topic] = counts.get(rec.topic, 0) + 1
+            types.setdefault(rec.topic, rec.ros_type)
+            t = rec.log_time_ns
+            if t < first.get(rec.topic, t + 1):
+                first[rec.topic] = t
+            if t > last.get(rec.topic, t - 1):
+                last[rec.topic] = t
+        topics = {name: TopicSummary(name, types[name], counts[name], first.get(name),
+                                     last.get(name)) for name in sorted(types)}
+        return LogInfo(str(self.path), self.library, self.truncated, sum(counts.values()),
+                       min(first.values(), default=None), max(last.values(), default=None),
+                       topics)
+
+    def close(self) -> None:
+        """Close the file (idempotent)."""
+        self._stream.close()
+
+    def __enter__(self) -> LogReader:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_log(path: str | Path) -> LogReader:
+    """Open a ROS 2 MCAP log for reading; use as a context manager.
+
+    Raises
+    ------
+    LogError
+        If the file is missing, is not an MCAP file, or is not a ROS 2 (``ros2`` profile,
+        ``cdr``/``ros2msg``) log. A truncated log opens with ``truncated`` set.
+    """
+    return LogReader(path)
+
+
+def read_messages(path: str | Path, topics: Iterable[str] | None = None,
+                  start_ns: int | None = None, end_ns: int | None = None,
+                  decode: bool = True) -> Iterator[LogRecord]:
+    """Yield the messages of the log at ``path`` (see :meth:`LogReader.messages`)."""
+    with open_log(path) as log:
+        yield from log.messages(topics, start_ns, end_ns, decode)
+
+
+def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
+    """Metadata records of the log at ``path`` by name."""
+    with open_log(path) as log:
+        return log.metadata()
+
+
+def summarize(path: str | Path) -> LogInfo:
+    """Per-topic message counts, types and first/last log times of the log at ``path``."""
+    with open_log(path) as log:
+        return log.info()

@@ -1,0 +1,60 @@
+"""The per-bin layers that travel with the bins: none, or Chen's cumulative alpha and n."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from phd_swarm.core.exchange.voronoi_phd.context import FilterContext
+from phd_swarm.core.exchange.voronoi_phd.layers import BinLayer, CumulativeLayer, layer_for
+from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.models import PhdModels
+
+GRID = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)
+
+
+def test_the_context_picks_the_layer():
+    assert type(layer_for(FilterContext(GRID, PhdModels()))) is BinLayer
+    assert type(layer_for(FilterContext(GRID, PhdModels(), cumulative=True))) is CumulativeLayer
+
+
+def test_the_plain_layer_carries_nothing():
+    layer = BinLayer()
+    layer.reset(4)
+    layer.observe(np.array([0, 1]), True)
+    layer.apply()
+    layer.take_over(2, [(np.array([0]), (np.array([1.0]), np.array([2.0])))])
+    assert layer.alpha is None and layer.count is None
+    assert layer.parcel(np.array([0])) == (None, None)
+
+
+def test_the_scans_of_a_step_count_at_its_end():
+    # Chen eq. 9-10: bin 0 seen by one scan with a detection, bin 2 by that scan and by
+    # one without, bin 1 by none.
+    layer = CumulativeLayer()
+    layer.reset(3)
+    layer.observe(np.array([0, 2]), True)
+    layer.observe(np.array([2]), False)
+    np.testing.assert_array_equal(layer.alpha, [0.0, 0.0, 0.0])  # not before the end
+    layer.apply()
+    np.testing.assert_array_equal(layer.alpha, [1.0, 0.0, 1.0])
+    np.testing.assert_array_equal(layer.count, [1, 0, 2])
+    layer.apply()  # a step without scans changes nothing
+    np.testing.assert_array_equal(layer.count, [1, 0, 2])
+
+
+def test_the_layer_goes_with_the_bins_and_orphans_start_unobserved():
+    layer = CumulativeLayer()
+    layer.reset(3)
+    layer.observe(np.array([0, 1, 2]), True)
+    layer.apply()
+    layer.observe(np.array([1]), False)
+    layer.apply()  # alpha (1, 1, 1), n (1, 2, 1)
+    kept = layer.parcel(np.array([True, False, True]))
+    given = layer.parcel(np.array([1]))
+    np.testing.assert_array_equal(given[0], [1.0])
+    np.testing.assert_array_equal(given[1], [2])
+    # Four bins afterwards: the kept two at positions 0 and 3, bin 1 from a robot without
+    # a layer, bin 2 from nobody (an orphan).
+    layer.take_over(4, [(np.array([0, 3]), kept), (np.array([1]), (None, None))])
+    np.testing.assert_array_equal(layer.alpha, [1.0, 0.0, 0.0, 1.0])
+    np.testing.assert_array_equal(layer.count, [1.0, 0.0, 0.0, 1.0])
