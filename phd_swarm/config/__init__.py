@@ -34,6 +34,7 @@ from typing import Any
 import yaml
 
 from phd_swarm.config.node_params import NODES, SHARED, ParamSpec
+from phd_swarm.core.params import expect_mapping
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim.scenario import Scenario, scenario_from_dict
 
@@ -146,11 +147,7 @@ class RunConfig:
         """A copy with another scenario and/or some node parameters replaced (validated)."""
         nodes = {k: dict(v) for k, v in self.nodes.items()}
         for kind, params in node_params.items():
-            specs = {s.name: s for s in NODES[kind]}
-            for name, value in params.items():
-                if name not in specs:
-                    raise ValueError(f"{kind}: unknown parameter {name!r}")
-                nodes.setdefault(kind, {})[name] = specs[name].check(value, kind)
+            nodes.setdefault(kind, {}).update(_check_params(params, kind, NODES[kind]))
         return RunConfig(self.scenario if scenario is None else scenario, dict(self.shared),
                          nodes, self.source).checked()
 
@@ -198,21 +195,26 @@ class RunConfig:
 
 def _check_block(block: Any, where: str, specs: tuple[ParamSpec, ...],
                  extra: tuple[str, ...] = ()) -> dict[str, Any]:
+    """A node's ``{ros__parameters: {...}}`` block: its parameters, checked by their specs.
+
+    The keys ``extra`` are allowed and left out of the result (the scenario of ``/**``).
+    """
     if not isinstance(block, Mapping) or set(block) != {"ros__parameters"}:
         raise ValueError(f"{where}: expected a mapping with the single key ros__parameters")
-    params = block["ros__parameters"] or {}
-    if not isinstance(params, Mapping):
-        raise ValueError(f"{where}.ros__parameters: expected a mapping, got {params!r}")
+    params = expect_mapping(block["ros__parameters"] or {}, f"{where}.ros__parameters")
+    return _check_params(params, where, specs, extra)
+
+
+def _check_params(params: Mapping[str, Any], where: str, specs: tuple[ParamSpec, ...],
+                  extra: tuple[str, ...] = ()) -> dict[str, Any]:
+    """Name -> value checked by its spec; errors start with ``where: name``."""
     by_name = {s.name: s for s in specs}
-    out: dict[str, Any] = {}
-    for name, value in params.items():
-        if name in extra:
-            continue
-        if name not in by_name:
-            raise ValueError(f"{where}: unknown parameter {name!r}; expected one of "
-                             f"{sorted([*by_name, *extra])}")
-        out[name] = by_name[name].check(value, where)
-    return out
+    try:
+        expect_mapping(params, "", [*by_name, *extra])
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    return {name: by_name[name].check(value, where) for name, value in params.items()
+            if name not in extra}
 
 
 def run_config_from_dict(doc: Any, where: str = "config",

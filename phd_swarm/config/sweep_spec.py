@@ -33,20 +33,27 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import math
-import numbers
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from phd_swarm.config import read_yaml
+from phd_swarm.core.params import (
+    Item,
+    expect_int,
+    expect_list,
+    expect_mapping,
+    expect_number,
+    expect_str,
+)
 from phd_swarm.core.registry import ROLES
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.engines import ENGINES as ENGINE_CLASSES
-from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
+from phd_swarm.sim.scenario import PRESETS, Scenario, preset_name, scenario_from_dict
 
 #: Ways to reduce a trial's per-step OSPA series to one number.
 METRICS = ("final", "mean", "median")
@@ -321,70 +328,24 @@ def find_spec(name_or_path: str) -> Path:
 
 
 # -------------------------------------------------------------------------- validation
-def _fail(where: str, key: str, msg: str) -> SpecError:
-    return SpecError(f"{where}: {key}: {msg}")
+# Each check takes (value, key path) and returns the value parsed or raises ValueError
+# naming the key path; load_spec puts the file in front.
 
-
-def _int(where: str, key: str, value: Any, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise _fail(where, key, f"expected an integer >= {low}, got {value!r}")
-    return int(value)
-
-
-def _number(where: str, key: str, value: Any, low: float, strict: bool) -> float:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    if ok:
-        v = float(value)
-        ok = math.isfinite(v) and (v > low if strict else v >= low)
-    if not ok:
-        raise _fail(where, key, f"expected a number {'>' if strict else '>='} {low:g}, "
-                                f"got {value!r}")
-    return float(value)
-
-
-def _str(where: str, key: str, value: Any) -> str:
-    if not isinstance(value, str):
-        raise _fail(where, key, f"expected a string, got {value!r}")
-    return value
-
-
-def _list(where: str, key: str, value: Any, item) -> tuple:
-    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence):
-        raise _fail(where, key, f"expected a list, got {value!r}")
-    if not value:
-        raise _fail(where, key, "expected a non-empty list")
-    out = tuple(item(f"{key}[{i}]", v) for i, v in enumerate(value))
-    if len(set(out)) != len(out):
-        raise _fail(where, key, f"values must be distinct, got {list(value)}")
-    return out
-
-
-def _mapping(where: str, key: str, value: Any, allowed: Sequence[str] | None) -> Mapping:
-    if not isinstance(value, Mapping):
-        raise _fail(where, key, f"expected a mapping, got {value!r}")
-    if allowed is not None:
-        for k in value:
-            if k not in allowed:
-                name = f"{key}.{k}" if key else str(k)
-                raise _fail(where, name, f"unknown key; expected one of {sorted(allowed)}")
-    return value
-
-
-def _methods(where: str, key: str, value: Any) -> dict[str, str]:
+def _methods(value: Any, path: str) -> dict[str, str]:
     """Label -> method text (:func:`controller_name`), each checked against the registry.
 
     A method is a controller name (``phd``) or a system block (``{controller: chen_o,
     options: {cumulative_mode: laplace}}``, :mod:`phd_swarm.core.system`); the older form
     ``{kind: chen_o, cumulative_mode: laplace}`` is read as the same.
     """
-    m = _mapping(where, key, value, None)
+    m = expect_mapping(value, path)
     if not m:
-        raise _fail(where, key, "expected at least one method (label: controller)")
+        raise ValueError(f"{path}: expected at least one method (label: controller)")
     out = {}
     for label, method in m.items():
-        name = f"{key}.{label}"
+        name = f"{path}.{label}"
         if not isinstance(label, str) or not _LABEL.match(label):
-            raise _fail(where, name, "a method label must be letters, digits and underscores")
+            raise ValueError(f"{name}: a method label must be letters, digits and underscores")
         legacy = isinstance(method, Mapping) and "kind" in method
         if isinstance(method, str):
             block: dict[str, Any] = {"controller": method}
@@ -394,13 +355,13 @@ def _methods(where: str, key: str, value: Any) -> dict[str, str]:
         elif isinstance(method, Mapping):
             block = dict(method)
             if "plugins" in block:
-                raise _fail(where, f"{name}.plugins", "list plugins once, under "
-                                                      "scenario.system.plugins")
+                raise ValueError(f"{name}.plugins: list plugins once, under "
+                                 f"scenario.system.plugins")
             if "controller" not in block:
-                raise _fail(where, f"{name}.controller", "missing; expected a controller")
+                raise ValueError(f"{name}.controller: missing; expected a controller")
         else:
-            raise _fail(where, name, f"expected a controller or a system block, got "
-                                     f"{method!r}")
+            raise ValueError(f"{name}: expected a controller or a system block, got "
+                             f"{method!r}")
         try:
             system = SystemConfig.from_dict(block, "system")
         except ValueError as exc:
@@ -408,12 +369,49 @@ def _methods(where: str, key: str, value: Any) -> dict[str, str]:
             if legacy:
                 sub = sub.removeprefix("options.").replace("controller", "kind")
             if isinstance(method, str) and sub == "controller":
-                raise _fail(where, name, msg) from None
-            raise _fail(where, f"{name}.{sub}", msg) from None
+                raise ValueError(f"{name}: {msg}") from None
+            raise ValueError(f"{name}.{sub}: {msg}") from None
         parts = {r: block[r] for r in ROLES if r in block and r != "controller"}
         out[label] = controller_name(system.controller,
                                      {**parts, **dict(block.get("options") or {})})
     return out
+
+
+def _window(value: Any, path: str) -> tuple[float, float]:
+    w = _axis(partial(expect_number, low=0.0))(value, path)
+    if len(w) != 2 or not w[1] > w[0]:
+        raise ValueError(f"{path}: expected [start, end] in seconds with end > start, "
+                         f"got {list(value)}")
+    return w[0], w[1]
+
+
+def _scenario(value: Any, path: str) -> dict[str, Any]:
+    sc = expect_mapping(value, path)
+    for name in sc:
+        if name in AXIS_FIELDS:
+            raise ValueError(f"{path}.{name}: set by the sweep; use the top-level keys "
+                             f"robots / resolutions / duration / base_seed instead")
+    if isinstance(sc.get("targets"), Mapping) and "count" in sc["targets"]:
+        raise ValueError(f"{path}.targets.count: set by the sweep; use the top-level key "
+                         f"targets instead")
+    return dict(sc)
+
+
+def _axis(item: Item) -> Item:
+    """A check of a non-empty list of distinct values, each checked by ``item``."""
+    return partial(expect_list, item=item, nonempty=True, distinct=True)
+
+
+_positive = partial(expect_number, low=0.0, strict=True)
+
+#: Key of a spec (or of its ``quick:`` block) -> its check.
+_CHECKS: dict[str, Item] = {
+    "figure": expect_str, "description": expect_str, "methods": _methods,
+    "robots": _axis(partial(expect_int, low=1)), "targets": _axis(partial(expect_int, low=0)),
+    "resolutions": _axis(_positive), "trials": partial(expect_int, low=1),
+    "base_seed": partial(expect_int, low=0), "duration": _positive,
+    "metric": partial(expect_str, choices=METRICS), "window": _window,
+    "engine": partial(expect_str, choices=ENGINES), "scenario": _scenario}
 
 
 def controller_name(kind: str, options: Mapping[str, Any] | None = None) -> str:
@@ -456,55 +454,9 @@ def _option_value(text: str) -> Any:
     return {"True": True, "False": False}.get(text, text)
 
 
-def _form(where: str, doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
-    """Check the types of the overridable keys present in ``doc``; returns them parsed."""
-    out: dict[str, Any] = {}
-    for k, v in doc.items():
-        key = f"{prefix}{k}"
-        if k in ("figure", "description"):
-            out[k] = _str(where, key, v)
-        elif k == "methods":
-            out[k] = _methods(where, key, v)
-        elif k == "robots":
-            out[k] = _list(where, key, v, lambda n, x: _int(where, f"{prefix}{n}", x, 1))
-        elif k == "targets":
-            out[k] = _list(where, key, v, lambda n, x: _int(where, f"{prefix}{n}", x, 0))
-        elif k == "resolutions":
-            out[k] = _list(where, key, v,
-                           lambda n, x: _number(where, f"{prefix}{n}", x, 0.0, True))
-        elif k == "trials":
-            out[k] = _int(where, key, v, 1)
-        elif k == "base_seed":
-            out[k] = _int(where, key, v, 0)
-        elif k == "duration":
-            out[k] = _number(where, key, v, 0.0, True)
-        elif k == "metric":
-            if v not in METRICS:
-                raise _fail(where, key, f"expected one of {list(METRICS)}, got {v!r}")
-            out[k] = v
-        elif k == "engine":
-            if v not in ENGINES:
-                raise _fail(where, key, f"expected one of {list(ENGINES)}, got {v!r}")
-            out[k] = v
-        elif k == "window":
-            w = _list(where, key, v, lambda n, x: _number(where, f"{prefix}{n}", x, 0.0,
-                                                          False))
-            if len(w) != 2 or not w[1] > w[0]:
-                raise _fail(where, key, f"expected [start, end] in seconds with end > start, "
-                                        f"got {list(v)}")
-            out[k] = (w[0], w[1])
-        elif k == "scenario":
-            sc = _mapping(where, key, v, None)
-            for name in sc:
-                if name in AXIS_FIELDS:
-                    raise _fail(where, f"{key}.{name}", "set by the sweep; use the top-level "
-                                                        "keys robots / resolutions / "
-                                                        "duration / base_seed instead")
-            if isinstance(sc.get("targets"), Mapping) and "count" in sc["targets"]:
-                raise _fail(where, f"{key}.targets.count", "set by the sweep; use the "
-                                                           "top-level key targets instead")
-            out[k] = dict(sc)
-    return out
+def _form(doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
+    """The overridable keys present in ``doc``, checked and parsed."""
+    return {k: _CHECKS[k](v, f"{prefix}{k}") for k, v in doc.items() if k in _CHECKS}
 
 
 def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) -> SweepSpec:
@@ -523,102 +475,96 @@ def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) 
         names the file and the key.
     """
     path = Path(path)
-    where = str(path)
+    if engine is not None and engine not in ENGINES:
+        raise SpecError(f"engine: expected one of {list(ENGINES)}, got {engine!r}")
     try:
         doc = read_yaml(path, "sweep spec")
     except ValueError as exc:
         raise SpecError(str(exc)) from None
-    if doc is None:
-        doc = {}
-    _mapping(where, "", doc, TOP_KEYS)
-    if "preset" not in doc:
-        raise _fail(where, "preset", f"missing; expected one of {sorted(PRESETS)}")
-    preset = _str(where, "preset", doc["preset"])
-    if preset not in PRESETS:
-        raise _fail(where, "preset", f"unknown preset {preset!r}; expected one of "
-                                     f"{sorted(PRESETS)}")
-    name = _str(where, "name", doc.get("name", path.stem))
+    try:
+        return _load(path, {} if doc is None else doc, quick, engine)
+    except SpecError:
+        raise
+    except ValueError as exc:
+        raise SpecError(f"{path}: {exc}") from None
+
+
+def _load(path: Path, doc: Any, quick: bool, engine: str | None) -> SweepSpec:
+    """:func:`load_spec` of a parsed document; errors name the key, not the file."""
+    expect_mapping(doc, "", TOP_KEYS)
+    preset = preset_name(doc)
+    name = expect_str(doc.get("name", path.stem), "name")
     if not _LABEL.match(name):
-        raise _fail(where, "name", "must be letters, digits and underscores")
-    _load_spec_plugins(where, doc, path.parent)
-    full = _form(where, doc, "")
+        raise ValueError("name: must be letters, digits and underscores")
+    _load_spec_plugins(doc, path.parent)
+    full = _form(doc, "")
     for key in ("methods", "robots", "trials"):
         if key not in full:
-            raise _fail(where, key, "missing")
+            raise ValueError(f"{key}: missing")
     form = dict(full)
     qkeys: set[str] = set()
     if "quick" in doc:
-        q = _mapping(where, "quick", doc["quick"], OVERRIDABLE)
-        qform = _form(where, q, "quick.")
+        qform = _form(expect_mapping(doc["quick"], "quick", OVERRIDABLE), "quick.")
         if quick:
             if "scenario" in qform:
                 qform["scenario"] = {**form.get("scenario", {}), **qform["scenario"]}
             form.update(qform)
             qkeys = set(qform)
     elif quick:
-        raise _fail(where, "quick", "missing: this spec has no quick form")
+        raise ValueError("quick: missing: this spec has no quick form")
     if "quick" in doc and not quick:
         # Check the quick form too, so a spec is known good in both forms.
         load_spec(path, quick=True)
     if engine is not None:
-        if engine not in ENGINES:
-            raise SpecError(f"engine: expected one of {list(ENGINES)}, got {engine!r}")
         form["engine"] = engine
-    return _resolve(where, name, path, quick, preset, form, qkeys)
+    return _resolve(name, path, quick, preset, form, qkeys)
 
 
-def _load_spec_plugins(where: str, doc: Mapping[str, Any], base: Path) -> None:
+def _load_spec_plugins(doc: Mapping[str, Any], base: Path) -> None:
     """Import ``scenario.system.plugins`` first, so that methods may name their parts."""
     scen = doc.get("scenario")
     system = scen.get("system") if isinstance(scen, Mapping) else None
-    if not isinstance(system, Mapping) or "plugins" not in system:
-        return
-    try:
+    if isinstance(system, Mapping) and "plugins" in system:
         SystemConfig.from_dict({"plugins": system["plugins"]}, "scenario.system", base)
-    except ValueError as exc:
-        raise SpecError(f"{where}: {exc}") from None
 
 
-def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
-             form: dict[str, Any], qkeys: set[str]) -> SweepSpec:
+def _resolve(name: str, path: Path, quick: bool, preset: str, form: dict[str, Any],
+             qkeys: set[str]) -> SweepSpec:
     def key(k: str) -> str:
         return f"quick.{k}" if k in qkeys else k
 
     base_sc = PRESETS[preset]()
     scen = form.get("scenario", {})
-    try:
-        base = scenario_from_dict({"preset": preset, **scen}, where="scenario",
-                                  base_dir=path.parent)
-    except ValueError as exc:
-        raise SpecError(f"{where}: {exc}") from None
+    base = scenario_from_dict({"preset": preset, **scen}, where="scenario",
+                              base_dir=path.parent)
     duration = form.get("duration", base.duration)
     try:
         base = base.with_overrides(duration=duration)
     except ValueError as exc:
-        raise _fail(where, key("duration"), str(exc)) from None
+        raise ValueError(f"{key('duration')}: {exc}") from None
     targets = form.get("targets", (base.targets.count,))
     resolutions = form.get("resolutions", (base_sc.resolution,))
     for i, r in enumerate(resolutions):
         try:
             base.with_overrides(resolution=r)
         except ValueError as exc:
-            raise _fail(where, f"{key('resolutions')}[{i}]", str(exc)) from None
+            raise ValueError(f"{key('resolutions')}[{i}]: {exc}") from None
     for i, n in enumerate(targets):
         try:
             _with_count(base, n)
         except ValueError as exc:
-            raise _fail(where, f"{key('targets')}[{i}]", str(exc)) from None
+            raise ValueError(f"{key('targets')}[{i}]: {exc}") from None
     metric = form.get("metric", "final")
     window = form.get("window")
     if window is None:
         if metric != "final":
-            raise _fail(where, key("window"), f"required for metric {metric!r}")
+            raise ValueError(f"{key('window')}: required for metric {metric!r}")
         window = (0.0, float(duration))
     steps = base.steps
     times = [k * base.dt for k in range(steps)]
     if not any(window[0] <= t <= window[1] for t in times):
-        raise _fail(where, key("window"), f"[{window[0]:g}, {window[1]:g}] s holds no step "
-                                          f"of a {duration:g} s run")
+        raise ValueError(f"{key('window')}: [{window[0]:g}, {window[1]:g}] s holds no step "
+                         f"of a {duration:g} s run")
     spec = SweepSpec(
         name=name, path=path, quick=quick, preset=preset,
         figure=form.get("figure", name), description=form.get("description", ""),
@@ -627,10 +573,7 @@ def _resolve(where: str, name: str, path: Path, quick: bool, preset: str,
         base_seed=form.get("base_seed", 0), duration=float(duration), metric=metric,
         window=(float(window[0]), float(window[1])), scenario=scen,
         engine=form.get("engine", "central"))
-    try:
-        spec.trials_list()
-    except ValueError as exc:
-        raise SpecError(f"{where}: {exc}") from None
+    spec.trials_list()
     return spec
 
 

@@ -23,9 +23,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
+from .params import expect_list, expect_mapping, expect_str
 from .registry import ROLES, Part, RegistryError, load_plugins, lookup
 
 #: Dames (2020): disk sensor, grid PHD, Voronoi hand-over, PHD-weighted Lloyd.
@@ -62,12 +64,8 @@ class SystemConfig:
     plugins: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        plugins = self.plugins
-        if isinstance(plugins, str) or not isinstance(plugins, Sequence) \
-                or not all(isinstance(p, str) and p for p in plugins):
-            raise ValueError(f"system.plugins: expected a list of module names or .py files, "
-                             f"got {plugins!r}")
-        object.__setattr__(self, "plugins", tuple(plugins))
+        object.__setattr__(self, "plugins", expect_list(
+            self.plugins, "system.plugins", item=partial(expect_str, nonempty=True)))
         try:
             load_plugins(self.plugins)
         except RegistryError as exc:
@@ -90,32 +88,20 @@ class SystemConfig:
         (the directory of the config file) and stored absolute, so that a node started
         elsewhere from the resolved config finds them.
         """
+        d = expect_mapping(d, where, allowed=KEYS)
+        kw: dict[str, Any] = {role: expect_str(d[role], f"{where}.{role}")
+                              for role in ROLES if role in d}
+        kw["options"] = tuple(expect_mapping(d.get("options") or {}, f"{where}.options").items())
+        if "plugins" in d:
+            plugins = d["plugins"] or ()
+            if base_dir is not None and isinstance(plugins, Sequence) \
+                    and not isinstance(plugins, str):
+                plugins = [_absolute(p, Path(base_dir)) for p in plugins]
+            kw["plugins"] = plugins
         try:
-            if not isinstance(d, Mapping):
-                raise ValueError(f"expected a mapping, got {d!r}")
-            unknown = sorted(str(k) for k in d if k not in KEYS)
-            if unknown:
-                raise ValueError(f"{unknown[0]}: unknown key; expected one of {list(KEYS)}")
-            kw: dict[str, Any] = {}
-            for role in ROLES:
-                if role in d:
-                    if not isinstance(d[role], str):
-                        raise ValueError(f"{role}: expected a name, got {d[role]!r}")
-                    kw[role] = d[role]
-            options = d.get("options") or {}
-            if not isinstance(options, Mapping):
-                raise ValueError(f"options: expected a mapping, got {options!r}")
-            kw["options"] = tuple(options.items())
-            if "plugins" in d:
-                plugins = d["plugins"] or ()
-                if base_dir is not None and isinstance(plugins, Sequence) \
-                        and not isinstance(plugins, str):
-                    plugins = [_absolute(p, Path(base_dir)) for p in plugins]
-                kw["plugins"] = plugins
             return cls(**kw)
         except ValueError as exc:
-            msg = str(exc).removeprefix("system: ").removeprefix("system.")
-            raise ValueError(f"{where}.{msg}" if not msg.startswith(where) else msg) from None
+            raise ValueError(f"{where}.{str(exc).removeprefix('system.')}") from None
 
     def parts(self) -> dict[str, Part]:
         """Role -> the registered part (:class:`~phd_swarm.core.registry.Part`).
@@ -195,8 +181,8 @@ def _resolve_options(parts: dict[str, Part], given: dict[str, Any]) -> tuple:
         value = specs[name].default
         if name in given:
             try:
-                value = specs[name].check(given[name], "")
+                value = specs[name].check(given[name])
             except ValueError as exc:
-                raise ValueError(f"system.options.{str(exc).removeprefix(': ')}") from None
+                raise ValueError(f"system.options.{exc}") from None
         out.append((name, value))
     return tuple(out)

@@ -21,7 +21,7 @@ from phd_swarm.config import flatten, scenario_to_dict, unflatten
 from phd_swarm.config.node_params import ParamSpec
 from phd_swarm.core.registry import ROLES
 from phd_swarm.core.system import DEFAULT_PARTS, SystemConfig
-from phd_swarm.sim.scenario import PRESETS, Scenario, scenario_from_dict
+from phd_swarm.sim.scenario import PRESETS, Scenario, preset_name, scenario_from_dict
 
 
 class ParameterError(ValueError):
@@ -80,10 +80,11 @@ def declare_scenario(node: Node) -> Scenario:
         "Scenario preset (dames_static, dames_moving, chen_clustered); the other scenario.* "
         "parameters override it (docs/parameters.md)."))
     preset = node.declare_parameter("scenario.preset", "dames_static", desc).value
+    try:
+        preset = preset_name({"preset": preset})
+    except ValueError as exc:
+        raise ParameterError(f"{where}.{exc}") from None
     keys = _scenario_keys()
-    if preset not in keys:
-        raise ParameterError(f"{where}.preset: unknown preset {preset!r}; expected one of "
-                             f"{sorted(keys)}")
     names = sorted({k for flat in keys.values() for k in flat} - {"preset"})
     defaults = dict(keys[preset])
     values: dict[str, Any] = {"preset": preset}

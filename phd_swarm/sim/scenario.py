@@ -12,11 +12,9 @@ of range with an error that names the key and the file.
 from __future__ import annotations
 
 import dataclasses
-import math
-import numbers
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, partial
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +22,15 @@ from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
+from phd_swarm.core.params import (
+    expect_bool,
+    expect_box,
+    expect_int,
+    expect_list,
+    expect_mapping,
+    expect_number,
+    expect_str,
+)
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
@@ -40,18 +47,9 @@ MAP_100 = Environment(0.0, 0.0, 100.0, 100.0)
 #: 20 x 10 m robot start box at the bottom centre of the 100 x 100 m map (Chen Sec. 4).
 BOTTOM_CENTRE_BOX: Box = (40.0, 0.0, 60.0, 10.0)
 
-
-def _box(name: str, value: Any) -> Box:
-    try:
-        b = tuple(float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be four numbers (xmin, ymin, xmax, ymax), "
-                         f"got {value!r}") from None
-    if len(b) != 4 or not all(math.isfinite(v) for v in b) or not (b[2] > b[0]
-                                                                   and b[3] > b[1]):
-        raise ValueError(f"{name} must be four finite numbers (xmin, ymin, xmax, ymax) with "
-                         f"xmax > xmin and ymax > ymin, got {value!r}")
-    return b  # type: ignore[return-value]
+#: A list of boxes (``targets.clusters``) and of counts (``targets.per_cluster``).
+_boxes = partial(expect_list, item=expect_box)
+_counts = partial(expect_list, item=partial(expect_int, low=0))
 
 
 def _box_inside(name: str, box: Box, env: Environment) -> None:
@@ -59,26 +57,6 @@ def _box_inside(name: str, box: Box, env: Environment) -> None:
             and box[3] <= env.ymax):
         raise ValueError(f"{name} {box} must lie inside the environment "
                          f"({env.xmin}, {env.ymin}, {env.xmax}, {env.ymax})")
-
-
-def _real(name: str, value: Any, low: float = 0.0, strict: bool = False,
-          allow_inf: bool = False) -> float:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    if ok:
-        v = float(value)
-        finite = math.isfinite(v) or (allow_inf and v == math.inf)
-        ok = finite and (v > low if strict else v >= low)
-    if not ok:
-        raise ValueError(f"{name} must be a {'' if allow_inf else 'finite '}number "
-                         f"{'>' if strict else '>='} {low}, got {value!r}")
-    return float(value)
-
-
-def _int(name: str, value: Any, low: int) -> int:
-    if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
-            or value < low):
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -138,33 +116,22 @@ class TargetConfig:
     max_speed: float = 3.0
 
     def __post_init__(self) -> None:
-        if self.kind not in TARGET_KINDS:
-            raise ValueError(f"targets.kind must be one of {list(TARGET_KINDS)}, "
-                             f"got {self.kind!r}")
-        _int("targets.count", self.count, 0)
+        expect_str(self.kind, "targets.kind", choices=TARGET_KINDS)
+        expect_int(self.count, "targets.count", low=0)
         if self.draw_box is not None:
-            object.__setattr__(self, "draw_box", _box("targets.draw_box", self.draw_box))
+            object.__setattr__(self, "draw_box", expect_box(self.draw_box, "targets.draw_box"))
         elif self.kind == "static":
             raise ValueError("targets.draw_box is required for static targets")
-        _real("targets.speed", self.speed)
-        _real("targets.heading_sd", self.heading_sd)
-        _real("targets.heading_rate", self.heading_rate, strict=True)
-        if not isinstance(self.birth, bool):
-            raise ValueError(f"targets.birth must be true or false, got {self.birth!r}")
-        if self.birth_heading not in BIRTH_HEADINGS:
-            raise ValueError(f"targets.birth_heading must be one of {list(BIRTH_HEADINGS)}, "
-                             f"got {self.birth_heading!r}")
-        _real("targets.step_sd", self.step_sd)
-        _real("targets.max_speed", self.max_speed)
-        if isinstance(self.clusters, (str, bytes)) or not isinstance(self.clusters, Sequence):
-            raise ValueError(f"targets.clusters must be a list of boxes, got {self.clusters!r}")
-        clusters = tuple(_box(f"targets.clusters[{i}]", c) for i, c in enumerate(self.clusters))
+        expect_number(self.speed, "targets.speed", low=0.0)
+        expect_number(self.heading_sd, "targets.heading_sd", low=0.0)
+        expect_number(self.heading_rate, "targets.heading_rate", low=0.0, strict=True)
+        expect_bool(self.birth, "targets.birth")
+        expect_str(self.birth_heading, "targets.birth_heading", choices=BIRTH_HEADINGS)
+        expect_number(self.step_sd, "targets.step_sd", low=0.0)
+        expect_number(self.max_speed, "targets.max_speed", low=0.0)
+        clusters = _boxes(self.clusters, "targets.clusters")
         object.__setattr__(self, "clusters", clusters)
-        if not isinstance(self.per_cluster, Sequence) or isinstance(self.per_cluster, str):
-            raise ValueError(f"targets.per_cluster must be a list of integers, "
-                             f"got {self.per_cluster!r}")
-        per = tuple(_int(f"targets.per_cluster[{i}]", k, 0)
-                    for i, k in enumerate(self.per_cluster))
+        per = _counts(self.per_cluster, "targets.per_cluster")
         object.__setattr__(self, "per_cluster", per)
         if self.kind == "clustered_walk":
             if not clusters or len(per) != len(clusters):
@@ -238,27 +205,26 @@ class Scenario:
     system: SystemConfig = field(default_factory=SystemConfig)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"name must be a non-empty string, got {self.name!r}")
+        expect_str(self.name, "name", nonempty=True)
         if not isinstance(self.env, Environment):
             raise ValueError(f"env must be an Environment, got {type(self.env).__name__}")
-        _real("resolution", self.resolution, strict=True)
+        expect_number(self.resolution, "resolution", low=0.0, strict=True)
         try:
             Grid(self.env, float(self.resolution))
         except ValueError as exc:
             raise ValueError(f"resolution: {exc}") from None
         if not isinstance(self.models, PhdModels):
             raise ValueError(f"models must be PhdModels, got {type(self.models).__name__}")
-        _real("dt", self.dt, strict=True)
-        _real("duration", self.duration, strict=True)
+        expect_number(self.dt, "dt", low=0.0, strict=True)
+        expect_number(self.duration, "duration", low=0.0, strict=True)
         if round(self.duration / self.dt) < 1:
             raise ValueError(f"duration ({self.duration} s) must hold at least one step of "
                              f"dt = {self.dt} s")
-        _int("robots", self.robots, 1)
-        box = _box("robot_start_box", self.robot_start_box)
+        expect_int(self.robots, "robots", low=1)
+        box = expect_box(self.robot_start_box, "robot_start_box")
         _box_inside("robot_start_box", box, self.env)
         object.__setattr__(self, "robot_start_box", box)
-        _real("robot_max_speed", self.robot_max_speed, strict=True)
+        expect_number(self.robot_max_speed, "robot_max_speed", low=0.0, strict=True)
         if not isinstance(self.targets, TargetConfig):
             raise ValueError(f"targets must be a TargetConfig, "
                              f"got {type(self.targets).__name__}")
@@ -269,10 +235,10 @@ class Scenario:
                 raise ValueError(f"targets.heading_rate: {exc}") from None
         for i, c in enumerate(self.targets.clusters):
             _box_inside(f"targets.clusters[{i}]", c, self.env)
-        _real("extraction_threshold", self.extraction_threshold)
-        _real("ospa_c", self.ospa_c, strict=True)
-        _real("ospa_p", self.ospa_p, low=1.0, allow_inf=True)
-        _int("seed", self.seed, 0)
+        expect_number(self.extraction_threshold, "extraction_threshold", low=0.0)
+        expect_number(self.ospa_c, "ospa_c", low=0.0, strict=True)
+        expect_number(self.ospa_p, "ospa_p", low=1.0, allow_inf=True)
+        expect_int(self.seed, "seed", low=0)
         if not isinstance(self.system, SystemConfig):
             raise ValueError(f"system must be a SystemConfig, got {type(self.system).__name__}")
 
@@ -365,85 +331,28 @@ PRESETS: dict[str, Callable[[], Scenario]] = {
     "chen_clustered": chen_clustered}
 
 
-# Value parsers for scenario_from_dict: each takes (value, key path) and returns the field
-# value or raises ValueError naming the key path.
-
-def _p_number(value: Any, path: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{path}: expected a number, got {value!r}")
-    return float(value)
-
-
-def _p_int(value: Any, path: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ValueError(f"{path}: expected an integer, got {value!r}")
-    return int(value)
-
-
-def _p_str(value: Any, path: str) -> str:
-    if not isinstance(value, str):
-        raise ValueError(f"{path}: expected a string, got {value!r}")
-    return value
-
-
-def _p_bool(value: Any, path: str) -> bool:
-    if not isinstance(value, bool):
-        raise ValueError(f"{path}: expected true or false, got {value!r}")
-    return value
-
-
-def _p_list(value: Any, path: str) -> Sequence[Any]:
-    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence):
-        raise ValueError(f"{path}: expected a list, got {value!r}")
-    return value
-
-
-def _p_box(value: Any, path: str) -> Box:
-    items = _p_list(value, path)
-    if len(items) != 4:
-        raise ValueError(f"{path}: expected four numbers (xmin, ymin, xmax, ymax), "
-                         f"got {value!r}")
-    return tuple(_p_number(v, f"{path}[{i}]") for i, v in enumerate(items))  # type: ignore
-
-
-def _p_boxes(value: Any, path: str) -> tuple[Box, ...]:
-    return tuple(_p_box(v, f"{path}[{i}]") for i, v in enumerate(_p_list(value, path)))
-
-
-def _p_ints(value: Any, path: str) -> tuple[int, ...]:
-    return tuple(_p_int(v, f"{path}[{i}]") for i, v in enumerate(_p_list(value, path)))
-
-
-def _p_mapping(value: Any, path: str, allowed: Sequence[str]) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise ValueError(f"{path}: expected a mapping, got {value!r}")
-    unknown = sorted(str(k) for k in value if k not in allowed)
-    if unknown:
-        raise ValueError(f"{path}.{unknown[0]}: unknown key; expected one of "
-                         f"{sorted(allowed)}")
-    return value
-
-
+# Value parsers of scenario_from_dict: (value, key path) -> the field's value, converted (a
+# float for a number); the ranges are checked by the dataclasses.
 _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
-    "kind": _p_str, "count": _p_int, "draw_box": _p_box, "speed": _p_number,
-    "heading_sd": _p_number, "heading_rate": _p_number, "birth": _p_bool,
-    "birth_heading": _p_str,
-    "clusters": _p_boxes, "per_cluster": _p_ints, "step_sd": _p_number,
-    "max_speed": _p_number}
+    "kind": expect_str, "count": expect_int, "draw_box": expect_box, "speed": expect_number,
+    "heading_sd": expect_number, "heading_rate": expect_number, "birth": expect_bool,
+    "birth_heading": expect_str, "clusters": _boxes, "per_cluster": _counts,
+    "step_sd": expect_number, "max_speed": expect_number}
 
 _SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
-    "name": _p_str, "resolution": _p_number, "dt": _p_number, "duration": _p_number,
-    "robots": _p_int, "robot_start_box": _p_box, "robot_max_speed": _p_number,
-    "extraction_threshold": _p_number, "ospa_c": _p_number, "ospa_p": _p_number,
-    "seed": _p_int}
+    "name": expect_str, "resolution": expect_number, "dt": expect_number,
+    "duration": expect_number, "robots": expect_int, "robot_start_box": expect_box,
+    "robot_max_speed": expect_number, "extraction_threshold": expect_number,
+    "ospa_c": expect_number, "ospa_p": partial(expect_number, allow_inf=True),
+    "seed": expect_int}
 
 _MODEL_PARTS = ("detection", "measurement", "clutter", "motion", "survival", "birth")
 
 
 def _merge_env(base: Environment, value: Any, path: str) -> Environment:
     names = [f.name for f in dataclasses.fields(Environment)]
-    cfg = _p_mapping(value, path, names)
-    kw = {k: _p_number(v, f"{path}.{k}") for k, v in cfg.items()}
+    cfg = expect_mapping(value, path, names)
+    kw = {k: expect_number(v, f"{path}.{k}") for k, v in cfg.items()}
     try:
         return dataclasses.replace(base, **kw)
     except ValueError as exc:
@@ -451,20 +360,20 @@ def _merge_env(base: Environment, value: Any, path: str) -> Environment:
 
 
 def _merge_models(base: PhdModels, value: Any, path: str) -> PhdModels:
-    cfg = _p_mapping(value, path, (*_MODEL_PARTS, "initial_density"))
+    cfg = expect_mapping(value, path, (*_MODEL_PARTS, "initial_density"))
     kw: dict[str, Any] = {}
     try:
         for part in _MODEL_PARTS:
             if part not in cfg:
                 continue
             current = getattr(base, part)
-            sub = _p_mapping(cfg[part], f"{path}.{part}",
-                             [f.name for f in dataclasses.fields(current)])
+            sub = expect_mapping(cfg[part], f"{path}.{part}",
+                                 [f.name for f in dataclasses.fields(current)])
             kw[part] = dataclasses.replace(
-                current, **{k: _p_number(v, f"{path}.{part}.{k}") for k, v in sub.items()})
+                current, **{k: expect_number(v, f"{path}.{part}.{k}") for k, v in sub.items()})
         if "initial_density" in cfg:
-            kw["initial_density"] = _p_number(cfg["initial_density"],
-                                              f"{path}.initial_density")
+            kw["initial_density"] = expect_number(cfg["initial_density"],
+                                                  f"{path}.initial_density")
         return dataclasses.replace(base, **kw)
     except ValueError as exc:
         msg = str(exc)
@@ -472,9 +381,16 @@ def _merge_models(base: PhdModels, value: Any, path: str) -> PhdModels:
 
 
 def _merge_targets(base: TargetConfig, value: Any, path: str) -> TargetConfig:
-    cfg = _p_mapping(value, path, list(_TARGET_PARSERS))
+    cfg = expect_mapping(value, path, list(_TARGET_PARSERS))
     kw = {k: _TARGET_PARSERS[k](v, f"{path}.{k}") for k, v in cfg.items()}
     return dataclasses.replace(base, **kw)
+
+
+def preset_name(d: Mapping[str, Any]) -> str:
+    """The preset ``d["preset"]`` names; ValueError ``preset: ...`` if missing or unknown."""
+    if "preset" not in d:
+        raise ValueError(f"preset: missing; expected one of {sorted(PRESETS)}")
+    return expect_str(d["preset"], "preset", choices=sorted(PRESETS))
 
 
 def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
@@ -510,17 +426,9 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
         ``runs/a.yaml: targets.speed: expected a number, got 'fast'``).
     """
     try:
-        if not isinstance(d, Mapping):
-            raise ValueError(f"expected a mapping at the top level, got {d!r}")
         allowed = ("preset", "env", "models", "targets", "system", *_SCALAR_PARSERS)
-        cfg = _p_mapping(d, "<root>", allowed)
-        if "preset" not in cfg:
-            raise ValueError(f"preset: missing; expected one of {sorted(PRESETS)}")
-        name = _p_str(cfg["preset"], "preset")
-        if name not in PRESETS:
-            raise ValueError(f"preset: unknown preset {name!r}; expected one of "
-                             f"{sorted(PRESETS)}")
-        base = PRESETS[name]()
+        cfg = expect_mapping(d, "", allowed)
+        base = PRESETS[preset_name(cfg)]()
         kw: dict[str, Any] = {k: _SCALAR_PARSERS[k](v, k) for k, v in cfg.items()
                               if k in _SCALAR_PARSERS}
         if "env" in cfg:
@@ -533,10 +441,9 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
             kw["system"] = SystemConfig.from_dict(cfg["system"], "system", base_dir)
         return base.with_overrides(**kw)
     except ValueError as exc:
-        msg = str(exc).removeprefix("<root>.")
-        raise ValueError(f"{where}: {msg}") from None
+        raise ValueError(f"{where}: {exc}") from None
 
 
 __all__ = ["BOTTOM_CENTRE_BOX", "MAP_100", "PRESETS", "TARGET_KINDS", "Scenario",
-           "TargetConfig", "chen_clustered", "dames_moving", "dames_static",
+           "TargetConfig", "chen_clustered", "dames_moving", "dames_static", "preset_name",
            "scenario_from_dict"]

@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import yaml
 
-from phd_swarm.config import load_run_config
+from phd_swarm.config import load_run_config, run_config_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,3 +24,37 @@ def test_the_world_deadline_must_span_several_robot_liveness_periods(tmp_path):
     bad.write_text(text)
     with pytest.raises(ValueError, match=rf"{bad}: world.step_timeout"):
         load_run_config(bad)
+
+
+@pytest.mark.parametrize(("block", "message"), [
+    ("world: {ros__parameters: {step_timout: 15.0}}",
+     "world: step_timout: unknown key; expected one of ['linger', 'mode', "),
+    ("world: {ros__parameters: {step_timeout: 0.05}}",
+     "world: step_timeout: expected a number in [0.1, 3600], got 0.05"),
+    ("world: {ros__parameters: {step_timeout: .nan}}",
+     "world: step_timeout: expected a finite number in [0.1, 3600], got nan"),
+    ("world: {ros__parameters: {observers: true}}",
+     "world: observers: expected an integer in [0, 64], got True"),
+    ("world: {ros__parameters: {mode: fast}}",
+     "world: mode: expected one of ['lockstep', 'realtime'], got 'fast'"),
+    ("world: {ros__parameters: {publish_markers: 1}}",
+     "world: publish_markers: expected true or false, got 1"),
+    ("world: {ros__parameters: [1]}", "world.ros__parameters: expected a mapping, got [1]"),
+    ("world: {params: {}}", "world: expected a mapping with the single key ros__parameters"),
+])
+def test_bad_node_parameters_name_the_file_the_node_and_the_key(block, message):
+    doc = yaml.safe_load((ROOT / "config" / "dames_static.yaml").read_text())
+    doc.update(yaml.safe_load(block))
+    with pytest.raises(ValueError) as exc:
+        run_config_from_dict(doc, "runs/bad.yaml", ROOT / "config")
+    assert str(exc.value).startswith(f"runs/bad.yaml: {message}")
+
+
+def test_overrides_are_checked_by_the_same_specs():
+    rc = load_run_config(ROOT / "config" / "dames_static.yaml")
+    assert rc.with_overrides(world={"observers": 2}).param("world", "observers") == 2
+    with pytest.raises(ValueError, match=r"^world: observer: unknown key; expected one of"):
+        rc.with_overrides(world={"observer": 2})
+    with pytest.raises(ValueError, match=r"^robot: tick_period: expected a number in "
+                                         r"\[0.01, 600\], got 'slow'"):
+        rc.with_overrides(robot={"tick_period": "slow"})

@@ -30,13 +30,13 @@ def test_with_parts_keeps_the_options_the_new_parts_take():
 
 @pytest.mark.parametrize(("block", "message"), [
     ({"controller": "lloyd"}, "system.controller: unknown controller 'lloyd'"),
-    ({"estimator": 3}, "system.estimator: expected a name, got 3"),
+    ({"estimator": 3}, "system.estimator: expected a string, got 3"),
     ({"radio": "x"}, "system.radio: unknown key"),
     ({"options": {"rho_max": 1.0}}, "system.options.rho_max: unknown option"),
     ({"controller": "chen_o", "options": {"cumulative_mode": "x"}},
-     "system.options.cumulative_mode: must be one of"),
+     "system.options.cumulative_mode: expected one of ['rate', 'literal', 'laplace']"),
     ({"controller": "chen_p", "options": {"rho_max": "big"}},
-     "system.options.rho_max: expected float"),
+     "system.options.rho_max: expected a number in [0, 1000000], got 'big'"),
     ({"plugins": "my.py"}, "system.plugins: expected a list"),
     ({"plugins": ["no_such_plugin_module"]}, "system.plugins: plugin 'no_such_plugin_module'"),
 ])

@@ -147,10 +147,41 @@ def test_from_dict_rejects_values_out_of_range(cfg, key):
         scenario_from_dict(cfg, where="cfg.yaml")
 
 
+@pytest.mark.parametrize("cfg, message", [
+    ({"dt": math.nan}, "dt: expected a finite number, got nan"),
+    ({"robot_max_speed": math.inf}, "robot_max_speed: expected a finite number, got inf"),
+    ({"targets": {"speed": -math.inf}}, "targets.speed: expected a finite number, got -inf"),
+    ({"models": {"detection": {"p_d": math.nan}}},
+     "models.detection.p_d: expected a finite number, got nan"),
+    ({"robot_start_box": [0, 0, math.inf, 5]},
+     "robot_start_box[2]: expected a finite number, got inf"),
+    ({"ospa_p": math.nan}, "ospa_p: expected a number, got nan"),
+    ({"ospa_p": -math.inf}, "ospa_p: expected a number >= 1, got -inf"),
+    ({"seed": True}, "seed: expected an integer, got True"),
+    ({"targets": {"per_cluster": [30, 30.0]}},
+     "targets.per_cluster[1]: expected an integer >= 0, got 30.0"),
+])
+def test_from_dict_refuses_nan_infinities_and_bools_naming_the_key(cfg, message):
+    with pytest.raises(ValueError) as exc:
+        scenario_from_dict({"preset": "chen_clustered", **cfg}, where="cfg.yaml")
+    assert str(exc.value) == f"cfg.yaml: {message}"
+
+
+def test_the_dataclasses_check_with_the_same_messages():
+    with pytest.raises(ValueError, match=r"^robots: expected an integer >= 1, got 0$"):
+        dames_static().with_overrides(robots=0)
+    with pytest.raises(ValueError, match=r"^targets.count: expected an integer >= 0, got True$"):
+        TargetConfig(kind="dames_walk", count=True)
+    with pytest.raises(ValueError, match=r"^targets.clusters\[0\]: expected four numbers"):
+        TargetConfig(kind="clustered_walk", count=1, clusters=((0, 0, 1),), per_cluster=(1,))
+    with pytest.raises(ValueError, match=r"^name: expected a non-empty string, got ''$"):
+        dames_static().with_overrides(name="")
+
+
 def test_from_dict_needs_a_known_preset():
     with pytest.raises(ValueError, match="f.yaml: preset: missing"):
         scenario_from_dict({"robots": 3}, where="f.yaml")
-    with pytest.raises(ValueError, match="f.yaml: preset: unknown preset"):
+    with pytest.raises(ValueError, match=r"f.yaml: preset: expected one of \[.*\], got 'nope'"):
         scenario_from_dict({"preset": "nope"}, where="f.yaml")
     with pytest.raises(ValueError, match="f.yaml: expected a mapping"):
         scenario_from_dict([1, 2], where="f.yaml")
@@ -169,7 +200,7 @@ def test_birth_heading_is_read_from_the_config_and_checked():
     sc = scenario_from_dict({"preset": "dames_moving",
                              "targets": {"birth_heading": "uniform"}})
     assert sc.targets.birth_heading == "uniform"
-    with pytest.raises(ValueError, match="targets.birth_heading must be one of"):
+    with pytest.raises(ValueError, match="targets.birth_heading: expected one of"):
         scenario_from_dict({"preset": "dames_moving", "targets": {"birth_heading": "north"}})
 
 
