@@ -23,13 +23,14 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.estimators.central_phd import CentralPhdFilter
 from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.models import PRESETS
 from phd_swarm.core.ospa import ospa
-from phd_swarm.core.partition import bin_owners, partition
+from phd_swarm.core.ownership import bin_owners
+from phd_swarm.core.partition import partition
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.disk import simulate_scan
+from phd_swarm.sim.scenario import PRESETS
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)
 
@@ -50,7 +51,7 @@ def _timed(fn: Callable[[], object], repeats: int, warmup: int = 1) -> dict[str,
 def bench_team_step(resolution: float, preset: str, repeats: int) -> dict[str, object]:
     """Centralised predict + 100 sequential updates on a 100 x 100 m map."""
     rng = np.random.default_rng(7)
-    models = PRESETS[preset]()
+    models = PRESETS[preset]().models
     filt = CentralPhdFilter(Grid(ENV, resolution), models)
     targets = rng.uniform(0.0, 100.0, (50, 2))
     sensors = [rng.uniform(0.0, 100.0, (100, 2)) for _ in range(repeats + 1)]

@@ -10,7 +10,9 @@ the same run cover every system. One step k:
 
 1. :meth:`Agent.observe_team` (or :meth:`Agent.rejoin`): the world's membership at step k;
 2. :meth:`Agent.start_step` with the robot's position q^k and its measurement set Z^k:
-   the exchange starts the step and returns the first messages to send;
+   the estimator predicts and updates with the scan (unless the exchange runs it, as for
+   Dames' distributed grid PHD: ``runs_in_exchange``, :mod:`phd_swarm.core.estimators.base`),
+   then the exchange starts the step and returns the first messages to send;
 3. :meth:`Agent.receive` + :meth:`Agent.advance` for every message that arrives, and
    :meth:`Agent.tick` for every round (tick period) without progress, until
    :attr:`Agent.done`; each returns the messages to send (addressed envelopes);
@@ -32,6 +34,7 @@ import numpy as np
 
 from .controllers.base import Decision, Knowledge
 from .registry import ROLES, Part
+from .scan import Scan
 
 #: Child of the scenario's SeedSequence whose children are the robots' own streams.
 ROBOT_STREAMS = 3
@@ -115,7 +118,9 @@ class Agent:
         self.estimator = team.make("estimator", robot_id)
         self.controller = team.make("controller", robot_id)
         self.rng = robot_generator(team.scenario.seed, robot_id)
-        self._view = team.parts["exchange"].extras["view"]
+        self._view = team.parts["exchange"].extras.get("view", lambda exchange: None)
+        #: Whether this agent runs the estimator, or the exchange does (Dames' grid PHD).
+        self._runs_estimator = not team.parts["estimator"].extras.get("runs_in_exchange")
         self.power_weight = 0.0
         self.position = np.zeros(2)
         self.z = np.empty((0, 2))
@@ -141,9 +146,15 @@ class Agent:
 
     # --------------------------------------------------------------------- step
     def start_step(self, step: int, position: np.ndarray, z: np.ndarray) -> list:
-        """Start ``step`` at ``position`` with measurement set ``z``; messages to send."""
+        """Start ``step`` at ``position`` with measurement set ``z``; messages to send.
+
+        The estimator predicts and takes the scan first (unless the exchange runs it).
+        """
         self.position = np.asarray(position, dtype=float)
         self.z = np.asarray(z, dtype=float).reshape(-1, 2)
+        if self._runs_estimator:
+            self.estimator.predict()
+            self.estimator.update(Scan(self.robot_id, step, self.position, self.z))
         return self.exchange.start_step(step, self.position, self.power_weight, self.z)
 
     def receive(self, msg: Any) -> bool:
@@ -171,7 +182,7 @@ class Agent:
     def finish_step(self) -> Decision:
         """The controller's decision at the end of the step (call once :attr:`done`)."""
         knowledge = Knowledge(self.robot_id, self.exchange.step, self.position, self.z,
-                              self._view(self.exchange))
+                              self._view(self.exchange), self.estimator)
         decision = self.controller.decide(knowledge, self.rng)
         self.power_weight = decision.power_weight
         return decision

@@ -36,55 +36,12 @@ Chen's "O" method) or of the PHD over its cell (eq. 14, the "P" method).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
 
 import numpy as np
 
-from .grid import Environment, Grid
+from .grid import Grid
 
 MODES = ("rate", "literal", "laplace")
-
-
-@dataclass(frozen=True)
-class CumulativeConfig:
-    """Parameters of the cumulative density and of the power weights.
-
-    Attributes
-    ----------
-    mode : str
-        ``"rate"`` (default, the posterior mode of the per-observation rate, (alpha-1)/n)
-        or ``"literal"`` (Chen eq. 11 as printed, (alpha-1)*n); see the module docstring.
-    rho_max : float or None
-        Cap on the power weight [m] (see :func:`power_weight`); ``None`` means the
-        diagonal of the environment (:meth:`rho_max_for`).
-    """
-
-    mode: str = "rate"
-    rho_max: float | None = None
-
-    def __post_init__(self) -> None:
-        if self.mode not in MODES:
-            raise ValueError(f"cumulative.mode must be one of {MODES}, got {self.mode!r}")
-        if self.rho_max is not None and not (np.isfinite(self.rho_max) and self.rho_max > 0):
-            raise ValueError(f"cumulative.rho_max must be a finite number > 0 or None, "
-                             f"got {self.rho_max!r}")
-
-    def rho_max_for(self, env: Environment) -> float:
-        """Return the power-weight cap [m]: ``rho_max`` if set, else the diagonal of ``env``."""
-        if self.rho_max is not None:
-            return float(self.rho_max)
-        return float(np.hypot(env.width, env.height))
-
-
-def cumulative_init(size: int) -> tuple[np.ndarray, np.ndarray]:
-    """Return the initial state of Chen Alg. 1 line 3: alpha = 0, n = 0 (beta = inf).
-
-    Returns
-    -------
-    alpha : np.ndarray, shape (size,), float
-    n : np.ndarray, shape (size,), int64
-    """
-    return np.zeros(int(size)), np.zeros(int(size), dtype=np.int64)
 
 
 def _check_state(alpha: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -104,75 +61,16 @@ def _check_state(alpha: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return a, cnt.astype(np.int64)
 
 
-def _fov_mask(in_fov: np.ndarray, size: int) -> np.ndarray:
-    sel = np.asarray(in_fov)
-    if sel.dtype == bool:
-        if sel.shape != (size,):
-            raise ValueError(f"in_fov mask must have shape ({size},), got {sel.shape}")
-        return sel
-    if sel.size == 0:
-        return np.zeros(size, dtype=bool)
-    if sel.ndim != 1 or not np.issubdtype(sel.dtype, np.integer):
-        raise ValueError("in_fov must be a boolean mask (K,) or a 1-D array of integer "
-                         f"bin indices, got dtype {sel.dtype} and shape {sel.shape}")
-    if np.any(sel < 0) or np.any(sel >= size):
-        raise ValueError(f"in_fov indices must lie in [0, {size}), got "
-                         f"[{sel.min()}, {sel.max()}]")
-    mask = np.zeros(size, dtype=bool)
-    # Through a mask, a bin listed twice is still observed once by this scan.
-    mask[sel] = True
-    return mask
-
-
-def cumulative_update(alpha: np.ndarray, n: np.ndarray, in_fov: np.ndarray,
-                      has_measurement: bool) -> tuple[np.ndarray, np.ndarray]:
-    """One scan's update of the cumulative state (Chen eq. 9-10); pure.
-
-    For every bin in the field of view: ``alpha += rw`` and ``n += 1`` (beta = 1/n), with
-    ``rw = 1`` if the scan holds any measurement (clutter included, as in eq. 10) and 0
-    otherwise. Bins outside the field of view are unchanged.
-
-    Chen applies eq. 9 to x in F_i, while Alg. 1 line 9 writes x in W_i (the robot's
-    cell): the caller selects the bins (e.g. F_i, restricted to the bins this robot
-    stores). Several scans covering a bin in one step are several observations: call this
-    once per scan.
-
-    Parameters
-    ----------
-    alpha : np.ndarray, shape (K,)
-        Total reward per bin (>= 0).
-    n : np.ndarray, shape (K,)
-        Number of observations per bin (whole numbers >= 0); beta = 1/n.
-    in_fov : np.ndarray
-        The observed bins: a boolean mask of shape (K,) or integer indices into [0, K)
-        (duplicates count once).
-    has_measurement : bool
-        Whether the scan Z_i is non-empty (|Z_i| > 0).
-
-    Returns
-    -------
-    alpha : np.ndarray, shape (K,), float
-        New total rewards.
-    n : np.ndarray, shape (K,), int64
-        New observation counts.
-    """
-    if not isinstance(has_measurement, (bool, np.bool_)):
-        raise ValueError(f"has_measurement must be a bool, got {has_measurement!r}")
-    a, cnt = _check_state(alpha, n)
-    mask = _fov_mask(in_fov, a.shape[0])
-    reward = 1.0 if has_measurement else 0.0
-    return a + reward * mask, cnt + mask
-
-
 def cumulative_update_counts(alpha: np.ndarray, n: np.ndarray, observations: np.ndarray,
                              rewards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Several scans' updates of the cumulative state at once (Chen eq. 9-10); pure.
 
     ``alpha += rewards`` and ``n += observations``, where ``observations`` counts the scans
     whose field of view held each bin and ``rewards`` those of them with a measurement.
-    Equal, bit for bit, to one :func:`cumulative_update` per scan: alpha, n and the
-    rewards are whole numbers (exact in float64 below 2**53), so adding them in one sum or
-    one scan at a time gives the same floats.
+    Chen applies eq. 9 to x in F_i, while Alg. 1 line 9 writes x in W_i (the robot's cell):
+    the caller counts the bins it stores. Several scans covering a bin in one step are
+    several observations. alpha, n and the rewards are whole numbers (exact in float64
+    below 2**53), so adding them in one sum or one scan at a time gives the same floats.
 
     Parameters
     ----------
@@ -280,8 +178,8 @@ def power_weight(mass: float | np.ndarray, rho_max: float) -> float | np.ndarray
     exceeds ``rho_max``) gets ``rho_max`` rather than inf: a robot that expects no targets
     gets the largest cell it can have, which is the paper's intent ("robots in areas with
     lower expected target density are assigned larger areas to explore"), while the
-    partition stays finite and well defined. The environment diagonal D is the default
-    cap (:meth:`CumulativeConfig.rho_max_for`) because it is E's own length scale: with
+    partition stays finite and well defined. The environment diagonal D is a natural cap
+    for a centralised partition because it is E's own length scale: with
     rho_i = D, ``||x - q_i||^2 - rho_i^2 <= 0`` at every x in E, so robot i claims all of
     E against a neighbour with rho = 0 and most of it against neighbours expecting about
     one target (rho = 1 m); a larger cap only lets an empty-handed robot take even more.

@@ -2,7 +2,7 @@
 
 Each robot r moves towards the weighted centroid of its cell (Dames 2020 eq. 8, Chen et al.
 eq. 2), the integral being replaced by the sum over the bins it owns (see
-:func:`phd_swarm.core.partition.assign_bins`), and advances at most ``d_step`` per time step
+:func:`phd_swarm.core.ownership.assign_bins`), and advances at most ``d_step`` per time step
 along the straight line to it (Chen eq. 3).
 
 The weighting function phi is one of (Dames Sec. II-C and IV, Chen Alg. 1):
@@ -15,20 +15,11 @@ The weighting function phi is one of (Dames Sec. II-C and IV, Chen Alg. 1):
 from __future__ import annotations
 
 from collections.abc import Callable
-from enum import StrEnum
 
 import numpy as np
 
 from .grid import Grid
-from .partition import polygon_area, polygon_centroid
-
-
-class Weighting(StrEnum):
-    """Importance weighting phi(x) used for the centroid (see the module docstring)."""
-
-    PHD = "phd"
-    UNIFORM = "uniform"
-    CUMULATIVE = "cumulative"
+from .polygons import polygon_area, polygon_centroid
 
 
 def _as_point(name: str, value: np.ndarray) -> np.ndarray:
@@ -100,7 +91,7 @@ def centroid_goal(grid: Grid, owned_flat_idx: np.ndarray, weights_of_owned: np.n
     owned_flat_idx : np.ndarray of int, shape (K,)
         Flat indices of the bins the robot owns.
     weights_of_owned : np.ndarray, shape (K,)
-        phi at those bins, >= 0 (see :func:`lloyd_weights`).
+        phi at those bins, >= 0 (the controllers' weights, :mod:`phd_swarm.core.controllers`).
     cell_polygon : np.ndarray, shape (V, 2), or a callable returning it
         The robot's cell [m]; (0, 2) if empty. A callable is called only when the
         fallback is needed (a caller that has no polygon at hand computes it then).
@@ -177,43 +168,3 @@ def next_position(position: np.ndarray, goal: np.ndarray, d_step: float) -> np.n
     if np.hypot(delta[0], delta[1]) <= d_step:
         return g.copy()
     return q + u
-
-
-def lloyd_weights(kind: Weighting | str, n: int, phd: np.ndarray | None = None,
-                  cumulative: np.ndarray | None = None) -> np.ndarray:
-    """Per-bin weights phi for the centroid, shape (n,), all >= 0.
-
-    Parameters
-    ----------
-    kind : Weighting or {"phd", "uniform", "cumulative"}
-        ``phd``: ``phd`` itself (Dames Sec. II-C, phi = v); ``uniform``: ones, so the goal
-        is the geometric centroid of the owned bins (coverage, Dames Sec. IV);
-        ``cumulative``: ``cumulative`` (Chen eq. 11, wc).
-    n : int
-        Number of bins the weights are for.
-    phd, cumulative : np.ndarray, shape (n,), optional
-        Required for the matching ``kind``; bin masses, non-negative.
-
-    Returns
-    -------
-    np.ndarray, shape (n,)
-        A new float array.
-    """
-    try:
-        kind = Weighting(kind)
-    except ValueError:
-        raise ValueError(f"unknown weighting {kind!r}; expected one of "
-                         f"{[w.value for w in Weighting]}") from None
-    if n < 0:
-        raise ValueError(f"n must be >= 0, got {n}")
-    if kind is Weighting.UNIFORM:
-        return np.ones(n)
-    source = phd if kind is Weighting.PHD else cumulative
-    if source is None:
-        raise ValueError(f"weighting {kind.value!r} needs the {kind.value} weights")
-    w = np.array(source, dtype=float).reshape(-1)
-    if w.shape != (n,):
-        raise ValueError(f"{kind.value} weights must have shape ({n},), got {w.shape}")
-    if not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{kind.value} weights must be finite and non-negative")
-    return w

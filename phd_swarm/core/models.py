@@ -10,9 +10,7 @@ Chen, Dames & Park (2021) Sec. 4 (Gaussian random walk, p_s = 1, no birth).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import ndtr
@@ -220,50 +218,6 @@ class PhdModels:
     def __post_init__(self) -> None:
         _check_positive("initial_density", self.initial_density, allow_zero=True)
 
-    @classmethod
-    def from_dict(cls, cfg: Mapping[str, Any], where: str = "models") -> PhdModels:
-        """Build from a nested mapping (e.g. a YAML block); unknown keys are errors.
-
-        ``where`` names the source (file and key) in error messages.
-        """
-        parts = {"detection": DiskDetection, "measurement": GaussianMeasurement,
-                 "clutter": UniformClutter, "motion": RandomWalkMotion,
-                 "survival": BoundarySurvival, "birth": BoundaryBirth}
-        if not isinstance(cfg, Mapping):
-            raise ValueError(f"{where}: expected a mapping, got {type(cfg).__name__}")
-        unknown = set(cfg) - set(parts) - {"initial_density"}
-        if unknown:
-            raise ValueError(f"{where}: unknown keys {sorted(unknown)}; "
-                             f"expected some of {sorted(parts) + ['initial_density']}")
-        kwargs: dict[str, Any] = {}
-        try:
-            for key, typ in parts.items():
-                if key in cfg:
-                    kwargs[key] = _dataclass_from_dict(typ, cfg[key], f"{where}.{key}")
-            if "initial_density" in cfg:
-                kwargs["initial_density"] = _number(cfg["initial_density"],
-                                                    f"{where}.initial_density")
-            return cls(**kwargs)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{where}: {exc}") from None
-
-
-def _dataclass_from_dict(typ: type, cfg: Any, where: str) -> Any:
-    if not isinstance(cfg, Mapping):
-        raise ValueError(f"{where}: expected a mapping, got {type(cfg).__name__}")
-    names = {f.name for f in fields(typ)}
-    unknown = set(cfg) - names
-    if unknown:
-        raise ValueError(f"{where}: unknown keys {sorted(unknown)}; expected some of "
-                         f"{sorted(names)}")
-    return typ(**{k: _number(v, f"{where}.{k}") for k, v in cfg.items()})
-
-
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where}: expected a number, got {value!r}")
-    return float(value)
-
 
 def dames_static() -> PhdModels:
     """Dames (2020) Sec. IV-A: static targets, p_s = 1, no birth."""
@@ -281,6 +235,3 @@ def chen_clustered() -> PhdModels:
     """Chen, Dames & Park (2021) Sec. 4: Gaussian walk sd 0.35 m, p_s = 1, no birth."""
     return PhdModels(motion=RandomWalkMotion(sd=0.35, truncation=4 * 0.35))
 
-
-PRESETS = {"dames_static": dames_static, "dames_moving": dames_moving,
-           "chen_clustered": chen_clustered}

@@ -10,13 +10,13 @@ Lloyd's algorithm uses (Dames eq. 8, Chen eq. 2).
 
 Two representations are kept, and they answer different questions:
 
-- *bin ownership* (:func:`assign_bins`, :func:`bin_owners`): each bin centre goes to the
-  generator of smallest power distance, ties to the lowest index. This is the canonical rule
-  that decides which robot stores a bin's PHD weight (Dames Sec. III, Alg. 1); it is
-  evaluated with one fixed floating-point expression so that a robot that only knows its
-  neighbours reproduces the global answer bit for bit (see :func:`assign_bins`).
-- *cell polygons* (:func:`cells`): W_r as a convex polygon, for areas, neighbour sets
-  (who must talk to whom, Dames Sec. II-D) and geometric centroids.
+- *bin ownership* (:mod:`.ownership`: :func:`~.ownership.assign_bins`,
+  :func:`~.ownership.bin_owners`): each bin centre goes to the generator of smallest power
+  distance, ties to the lowest index; the canonical rule that decides which robot stores a
+  bin's PHD weight (Dames Sec. III, Alg. 1).
+- *cell polygons* (this module, :func:`cells`, :func:`cell_of`, :func:`partition`): W_r as a
+  convex polygon, for areas, neighbour sets (who must talk to whom, Dames Sec. II-D) and
+  geometric centroids. Polygon primitives are in :mod:`.polygons`.
 
 Generators are indexed by their row in ``positions``; callers order the rows by robot id,
 so "lowest index" means "lowest robot id".
@@ -29,18 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .grid import Environment, Grid
-
-#: Float elements per (points x generators) block in :func:`assign_bins`: two 512 kB blocks
-#: stay in cache, which measured faster than larger blocks.
-_BLOCK_ELEMENTS = 1 << 16
-
-#: :func:`assign_bins` prunes generators per block of at most this many points ...
-_PRUNE_BLOCK = 4096
-#: ... when there are more generators than this.
-_PRUNE_MIN_GENERATORS = 8
-
-#: (bin, generator) pairs up to which :func:`bins_owned_in_box` evaluates every pair.
-_DIRECT_PAIRS = 1 << 14
+from .ownership import bin_owners, check_generators
+from .polygons import polygon_area
 
 #: Vertices closer than this fraction of (width + height) are merged after a clip.
 _MERGE_REL = 1e-12
@@ -48,396 +38,6 @@ _MERGE_REL = 1e-12
 #: Tolerance on power distances for "a vertex lies on a bisector", as a fraction of
 #: (width + height)^2 (see :func:`neighbours`).
 _TOUCH_REL = 1e-9
-
-
-def _check_generators(positions: np.ndarray,
-                      power_weights: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """Validate generators; return positions (R, 2) and rho^2 (R,) as float arrays."""
-    q = np.asarray(positions, dtype=float)
-    if q.ndim != 2 or q.shape[1] != 2 or q.shape[0] < 1:
-        raise ValueError(f"positions must have shape (R, 2) with R >= 1, got {q.shape}")
-    if not np.all(np.isfinite(q)):
-        raise ValueError("positions must be finite")
-    if power_weights is None:
-        rho = np.zeros(q.shape[0])
-    else:
-        rho = np.asarray(power_weights, dtype=float)
-        if rho.shape != (q.shape[0],):
-            raise ValueError(f"power_weights must have shape ({q.shape[0]},) to match "
-                             f"positions, got {rho.shape}")
-        if not np.all(np.isfinite(rho)) or np.any(rho < 0):
-            raise ValueError(f"power weights must be finite and >= 0, got {rho}")
-    return q, rho ** 2
-
-
-def assign_bins(points: np.ndarray, positions: np.ndarray,
-                power_weights: np.ndarray | None = None,
-                candidates: np.ndarray | None = None) -> np.ndarray:
-    """Owner of each point: the generator of smallest power distance (Chen eq. 12).
-
-    The power distance is evaluated as exactly ``(x0 - q0)**2 + (x1 - q1)**2 - rho**2`` in
-    float64 and the smallest value wins, ties going to the lowest generator index. Because
-    the value for a (point, generator) pair does not depend on which other generators are
-    compared, a robot that evaluates only itself and its neighbours (``candidates``) gets
-    the same owner as the global call wherever the global owner is among the candidates.
-    Use this function for every ownership decision; do not re-derive it with another
-    formula (KD-tree, lifted coordinates), which would round differently on ties.
-
-    Parameters
-    ----------
-    points : np.ndarray, shape (N, 2)
-        Query points [m], typically bin centres. N may be 0.
-    positions : np.ndarray, shape (R, 2)
-        Generators q [m], rows ordered by robot id.
-    power_weights : np.ndarray, shape (R,), optional
-        Power weights rho >= 0 [m]; None means 0 for all (Voronoi, Dames eq. 7).
-    candidates : np.ndarray of int, optional
-        Restrict the competition to these generator indices (any order; they are compared
-        in increasing index order so that ties resolve as in the global call).
-
-    Returns
-    -------
-    np.ndarray of int64, shape (N,)
-        Index into ``positions`` of each point's owner.
-
-    Notes
-    -----
-    Points are processed in blocks of about 2**16 / R, so memory stays near 1 MB for any
-    N (10^6 points x 100 robots is fine). With more than :data:`_PRUNE_MIN_GENERATORS`
-    generators, each block of points first drops the generators that cannot own any of
-    its points, as :func:`bins_owned_in_box` does for its tiles: over the block's bounding
-    box, generator k's power distance lies in [L_k, U_k], and one with L_k > min_j U_j +
-    margin is beaten everywhere in the box. The remaining generators are compared in
-    increasing index order with the same per-pair values, so the owners, ties included,
-    are those of the full comparison; only the cost falls (with 40 generators around a
-    field of view at 0.1 m, ~6x fewer pairs).
-    """
-    q, rho2 = _check_generators(positions, power_weights)
-    p = np.asarray(points, dtype=float).reshape(-1, 2)
-    if not np.all(np.isfinite(p)):
-        raise ValueError("points must be finite")
-    index = np.arange(q.shape[0])
-    if candidates is not None:
-        index = np.unique(np.asarray(candidates, dtype=np.int64))
-        if index.size == 0 or index[0] < 0 or index[-1] >= q.shape[0]:
-            raise ValueError(f"candidates must be a non-empty set of indices in "
-                             f"[0, {q.shape[0]}), got {candidates!r}")
-        q, rho2 = q[index], rho2[index]
-    n_gen = q.shape[0]
-    out = np.empty(p.shape[0], dtype=np.int64)
-    q0, q1 = q[:, 0], q[:, 1]
-    prune = n_gen > _PRUNE_MIN_GENERATORS and p.shape[0] > 1
-    block = min(_PRUNE_BLOCK, max(64, 2 * _BLOCK_ELEMENTS // n_gen)) if prune \
-        else max(1, _BLOCK_ELEMENTS // n_gen)
-    for start in range(0, p.shape[0], block):
-        x0 = p[start:start + block, 0:1]
-        x1 = p[start:start + block, 1:2]
-        g0, g1, g_rho2 = q0, q1, rho2
-        if prune:
-            keep = _contenders(x0, x1, q, rho2)
-            g0, g1, g_rho2 = q0[keep], q1[keep], rho2[keep]
-        # In-place ufuncs keep the memory at two blocks while computing the same rounded
-        # values as the expression in the docstring, in the same order.
-        d = np.subtract(x0, g0)
-        np.square(d, out=d)
-        t = np.subtract(x1, g1)
-        np.square(t, out=t)
-        d += t
-        d -= g_rho2
-        best = np.argmin(d, axis=1)
-        out[start:start + block] = keep[best] if prune else best
-    return index[out] if candidates is not None else out
-
-
-def _contenders(x0: np.ndarray, x1: np.ndarray, q: np.ndarray,
-                rho2: np.ndarray) -> np.ndarray:
-    """Ascending indices of the generators that may own a point in the points' bounding box.
-
-    The points' coordinates are x0, x1 (N, 1). Kept: the generators whose smallest power
-    distance over the box is not above the smallest largest one, plus a margin (see
-    :func:`bins_owned_in_box`).
-    """
-    near_x, far_x = _axis_bounds(x0.min(keepdims=True).reshape(1),
-                                 x0.max(keepdims=True).reshape(1), q[:, 0])
-    near_y, far_y = _axis_bounds(x1.min(keepdims=True).reshape(1),
-                                 x1.max(keepdims=True).reshape(1), q[:, 1])
-    lower = near_x[0] ** 2 + near_y[0] ** 2 - rho2
-    far2 = far_x[0] ** 2 + far_y[0] ** 2
-    upper = far2 - rho2
-    margin = 1e-9 * (far2 + rho2).max()
-    return np.flatnonzero(lower <= upper.min() + margin)
-
-
-def bin_owners(grid: Grid, positions: np.ndarray,
-               power_weights: np.ndarray | None = None) -> np.ndarray:
-    """Owner of every bin of ``grid``: :func:`assign_bins` of the bin centres.
-
-    Returns
-    -------
-    np.ndarray of int64, shape (grid.size,)
-        Generator index per flat bin index (``iy * nx + ix``).
-    """
-    return assign_bins(grid.centres, positions, power_weights)
-
-
-def bins_owned_in_box(grid: Grid, index: int, positions: np.ndarray,
-                      power_weights: np.ndarray | None,
-                      box: tuple[int, int, int, int]) -> np.ndarray:
-    """Bins of a box of the grid that :func:`assign_bins` gives to generator ``index``.
-
-    Equal to ``flat[assign_bins(grid.centres_of(flat), positions, power_weights) ==
-    index]`` for the ascending flat indices ``flat`` of the box (which is how boxes of up
-    to :data:`_DIRECT_PAIRS` (bin, generator) pairs are done), but without evaluating
-    every pair. The box is cut into about 8 x 8 tiles; for each tile and generator k,
-    bounds ``L_k <= d_k(x) <= U_k`` of the power distance over the tile's bin centres
-    follow from their nearest and farthest coordinates. A generator with
-    ``L_k > min_j U_j + margin`` is beaten at every bin of the tile, so the owners there
-    are those of the remaining *contenders*: a tile where ``index`` is the only contender
-    is all its own, one where it is none is none of its own, and only the bins of the
-    other tiles are assigned, by :func:`assign_bins` with the contenders of those tiles as
-    ``candidates`` (whose values per (point, generator) pair do not depend on the other
-    generators). The margin, 1e-9 of the largest squared distance plus rho^2 in the tile,
-    exceeds the rounding error of the power distances and of the bounds (a few 1e-16 of
-    that) by about 10^5, so pruning never changes a winner, ties included.
-
-    Parameters
-    ----------
-    grid : Grid
-    index : int
-        Row of ``positions`` whose bins are wanted.
-    positions : np.ndarray, shape (R, 2)
-        Generators q [m], rows ordered by robot id.
-    power_weights : np.ndarray, shape (R,), optional
-        rho [m]; None for Voronoi.
-    box : tuple of int
-        ``(iy0, iy1, ix0, ix1)``, inclusive bin-index ranges.
-
-    Returns
-    -------
-    np.ndarray of int64
-        Ascending flat indices of the bins of the box owned by ``index``.
-    """
-    q, rho2 = _check_generators(positions, power_weights)
-    iy0, iy1, ix0, ix1 = (int(v) for v in box)
-    if iy1 < iy0 or ix1 < ix0:
-        return np.empty(0, dtype=np.int64)
-    xs, ys = grid.xs[ix0:ix1 + 1], grid.ys[iy0:iy1 + 1]
-    if xs.size * ys.size * q.shape[0] <= _DIRECT_PAIRS:
-        iy, ix = np.meshgrid(np.arange(iy0, iy1 + 1), np.arange(ix0, ix1 + 1), indexing="ij")
-        flat = (iy * grid.nx + ix).ravel()
-        return flat[assign_bins(grid.centres_of(flat), q, power_weights) == index]
-    # About 8 x 8 tiles, of 4 to 32 bins a side.
-    tile = int(np.clip(round(np.sqrt(xs.size * ys.size) / 8), 4, 32))
-    col_tile = np.arange(xs.size) // tile
-    row_tile = np.arange(ys.size) // tile
-    first_x = np.arange(0, xs.size, tile)
-    first_y = np.arange(0, ys.size, tile)
-    near_x, far_x = _axis_bounds(xs[first_x], xs[np.minimum(first_x + tile, xs.size) - 1],
-                                 q[:, 0])
-    near_y, far_y = _axis_bounds(ys[first_y], ys[np.minimum(first_y + tile, ys.size) - 1],
-                                 q[:, 1])
-    # (tile rows, tile columns, generators)
-    lower = near_y[:, None, :] ** 2 + near_x[None, :, :] ** 2 - rho2
-    far2 = far_y[:, None, :] ** 2 + far_x[None, :, :] ** 2
-    upper = far2 - rho2
-    margin = 1e-9 * (far2 + rho2).max(axis=2, keepdims=True)
-    contender = lower <= upper.min(axis=2, keepdims=True) + margin
-    alone = contender[..., index] & (contender.sum(axis=2) == 1)
-    shared = contender[..., index] & ~alone
-    owned = alone[row_tile[:, None], col_tile[None, :]]
-    if shared.any():
-        rows, cols = np.nonzero(shared[row_tile[:, None], col_tile[None, :]])
-        flat = (iy0 + rows) * grid.nx + (ix0 + cols)
-        candidates = np.flatnonzero(contender[shared].any(axis=0))
-        mine = assign_bins(grid.centres_of(flat), q, power_weights,
-                           candidates=candidates) == index
-        owned[rows[mine], cols[mine]] = True
-    rows, cols = np.nonzero(owned)
-    return ((iy0 + rows) * grid.nx + (ix0 + cols)).astype(np.int64)
-
-
-def _axis_bounds(lo: np.ndarray, hi: np.ndarray,
-                 q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest and farthest |x - q| over the intervals [lo, hi] (T,) for each q (R,): (T, R)."""
-    below, above = lo[:, None] - q[None, :], q[None, :] - hi[:, None]
-    near = np.maximum(np.maximum(below, above), 0.0)
-    far = np.maximum(np.abs(below), np.abs(above))
-    return near, far
-
-
-def polygon_area(poly: np.ndarray) -> float:
-    """Area of a simple polygon by the shoelace formula [m^2], >= 0; (V, 2) -> float.
-
-    Polygons with fewer than 3 vertices have area 0.
-    """
-    p = np.asarray(poly, dtype=float).reshape(-1, 2)
-    if p.shape[0] < 3:
-        return 0.0
-    # Relative to the first vertex, so that far-from-origin polygons keep their precision.
-    p = p - p[0]
-    x, y = p[:, 0], p[:, 1]
-    return float(abs(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
-
-
-def polygon_centroid(poly: np.ndarray) -> np.ndarray:
-    """Centroid of a simple polygon's area [m], shape (2,); poly (V, 2).
-
-    A polygon of zero area (fewer than 3 vertices, or collinear ones) has the mean of its
-    vertices as centroid; an empty polygon (0 vertices) is an error.
-    """
-    p = np.asarray(poly, dtype=float).reshape(-1, 2)
-    if p.shape[0] == 0:
-        raise ValueError("an empty polygon has no centroid")
-    origin = p[0]
-    r = p - origin
-    x, y = r[:, 0], r[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    a2 = np.sum(cross)
-    scale = np.max(np.abs(r)) if r.size else 0.0
-    if p.shape[0] < 3 or abs(a2) <= 1e-14 * scale * scale:
-        return p.mean(axis=0)
-    cx = np.sum((x + xn) * cross) / (3.0 * a2)
-    cy = np.sum((y + yn) * cross) / (3.0 * a2)
-    return origin + np.array([cx, cy])
-
-
-def points_in_polygon(points: np.ndarray, poly: np.ndarray, tol: float = 0.0) -> np.ndarray:
-    """Whether each point lies in a convex counter-clockwise polygon grown by ``tol``.
-
-    A point is inside when its signed distance to every edge line is at most ``tol`` [m]
-    on the outer side: ``tol > 0`` also accepts points just outside (robust membership),
-    ``tol < 0`` only accepts points inside by more than ``-tol`` (strict interior).
-
-    Parameters
-    ----------
-    points : np.ndarray, shape (N, 2)
-        Query points [m].
-    poly : np.ndarray, shape (V, 2)
-        Convex polygon, counter-clockwise; V = 0 (empty cell) contains nothing.
-    tol : float
-        Margin [m].
-
-    Returns
-    -------
-    np.ndarray of bool, shape (N,)
-    """
-    p = np.asarray(points, dtype=float).reshape(-1, 2)
-    v = np.asarray(poly, dtype=float).reshape(-1, 2)
-    if v.shape[0] < 3:
-        return np.zeros(p.shape[0], dtype=bool)
-    inside = np.ones(p.shape[0], dtype=bool)
-    for k in range(v.shape[0]):
-        a, b = v[k], v[(k + 1) % v.shape[0]]
-        edge = b - a
-        length = np.hypot(edge[0], edge[1])
-        if length == 0.0:
-            continue
-        # Left of a CCW edge is inside: cross(edge, p - a) / |edge| is the inward distance.
-        inward = (edge[0] * (p[:, 1] - a[1]) - edge[1] * (p[:, 0] - a[0])) / length
-        inside &= inward >= -tol
-    return inside
-
-
-def points_in_polygons(points: np.ndarray, polys: list[np.ndarray],
-                       tol: float = 0.0) -> np.ndarray:
-    """:func:`points_in_polygon` of every point in every polygon, in one array operation.
-
-    ``points_in_polygons(p, polys, tol)[:, i] == points_in_polygon(p, polys[i], tol)``
-    exactly: the edges of all polygons are stacked and the same float expressions are
-    evaluated for every (point, edge) pair, so the cost is O(N x total vertices).
-
-    Parameters
-    ----------
-    points : np.ndarray, shape (N, 2)
-        Query points [m].
-    polys : list of np.ndarray, each shape (V_i, 2)
-        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
-    tol : float
-        Margin [m], as in :func:`points_in_polygon`.
-
-    Returns
-    -------
-    np.ndarray of bool, shape (N, len(polys))
-    """
-    p = np.asarray(points, dtype=float).reshape(-1, 2)
-    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
-    inside = np.zeros((p.shape[0], len(polys)), dtype=bool)
-    real = [i for i, v in enumerate(polys) if v.shape[0] >= 3]
-    if real and p.shape[0]:
-        a, starts, nxt = stack_polygons([polys[i] for i in real])
-        edge = a[nxt] - a
-        length = np.hypot(edge[:, 0], edge[:, 1])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inward = (edge[:, 0] * (p[:, 1:2] - a[:, 1]) - edge[:, 1] * (p[:, 0:1] - a[:, 0])) \
-                / length
-        # Zero-length edges are skipped, as in points_in_polygon.
-        ok = (inward >= -tol) | (length == 0.0)
-        inside[:, real] = np.logical_and.reduceat(ok, starts, axis=1)
-    return inside
-
-
-def points_in_any_polygon(points: np.ndarray, polys: list[np.ndarray],
-                          tol: float = 0.0) -> np.ndarray:
-    """Whether each point lies in at least one of ``polys`` (each grown by ``tol``).
-
-    :func:`points_in_polygons` or-ed over the polygons, taken in groups of about 2**16
-    (point, vertex) pairs; the points already inside a polygon are not tested against the
-    later groups.
-
-    Parameters
-    ----------
-    points : np.ndarray, shape (N, 2)
-        Query points [m].
-    polys : list of np.ndarray, each shape (V_i, 2)
-        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
-    tol : float
-        Margin [m], as in :func:`points_in_polygon`.
-
-    Returns
-    -------
-    np.ndarray of bool, shape (N,)
-    """
-    p = np.asarray(points, dtype=float).reshape(-1, 2)
-    inside = np.zeros(p.shape[0], dtype=bool)
-    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
-    first = 0
-    while first < len(polys) and not inside.all():
-        rest = np.flatnonzero(~inside)
-        n_vertices, last = 0, first
-        while last < len(polys) and (last == first or
-                                     rest.size * (n_vertices + len(polys[last])) <= 1 << 16):
-            n_vertices += len(polys[last])
-            last += 1
-        inside[rest] = points_in_polygons(p[rest], polys[first:last], tol).any(axis=1)
-        first = last
-    return inside
-
-
-def stack_polygons(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """All vertices of several polygons in one array, for edge-wise array operations.
-
-    Parameters
-    ----------
-    polys : list of np.ndarray, each shape (V_i, 2), V_i >= 1
-
-    Returns
-    -------
-    vertices : np.ndarray, shape (V, 2)
-        The polygons' vertices one after the other, V = sum V_i.
-    starts : np.ndarray of int64, shape (len(polys),)
-        Row of each polygon's first vertex (for ``ufunc.reduceat``).
-    following : np.ndarray of int64, shape (V,)
-        Row of the next vertex of the same polygon (its first after its last), so that
-        ``vertices[following] - vertices`` are the edges, as ``np.roll(poly, -1, axis=0)
-        - poly`` per polygon.
-    """
-    sizes = np.array([len(v) for v in polys], dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(sizes[:-1])]).astype(np.int64)
-    vertices = np.concatenate(polys).reshape(-1, 2)
-    following = np.arange(1, vertices.shape[0] + 1)
-    following[starts + sizes - 1] = starts
-    return vertices, starts, following
 
 
 def _clip(poly: np.ndarray, f: np.ndarray, merge_tol: float) -> np.ndarray:
@@ -514,12 +114,12 @@ def cells(env: Environment, positions: np.ndarray,
       O(number of cutting half-planes), not O(R) clips per robot.
     - Coincident generators (D = 0): the larger rho takes the whole shared region; with
       equal rho the lower index keeps its cell and the higher index gets an empty one, as
-      in :func:`assign_bins`.
+      in :func:`~.ownership.assign_bins`.
     - A power cell may be empty, and need not contain its own generator.
     - Cells of less than a triangle after merging vertices closer than
       1e-12 (width + height) are returned empty.
     """
-    q, rho2 = _check_generators(positions, power_weights)
+    q, rho2 = check_generators(positions, power_weights)
     return _power_cells(env, q, rho2)
 
 
@@ -611,7 +211,7 @@ def cell_of(env: Environment, index: int, positions: np.ndarray,
     neighbour_rows : np.ndarray of int64
         Sorted rows of ``positions`` whose cells touch this one (empty for an empty cell).
     """
-    q, rho2 = _check_generators(positions, power_weights)
+    q, rho2 = check_generators(positions, power_weights)
     n_gen = q.shape[0]
     if not 0 <= index < n_gen:
         raise ValueError(f"cell_of: index {index} out of range for {n_gen} generators")
@@ -651,8 +251,8 @@ def neighbours(env: Environment, positions: np.ndarray,
     d_j(v) = d_r(v) puts v in W_j too. These are the robots r must talk to (Dames Sec.
     II-D, Alg. 1).
 
-    Corner contacts count because the lowest-index rule of :func:`assign_bins` can give a
-    bin centre exactly at a shared corner to either cell. W_r is E cut by the half-planes
+    Corner contacts count because the lowest-index rule of :func:`~.ownership.assign_bins` can
+    give a bin centre exactly at a shared corner to either cell. W_r is E cut by the half-planes
     of N(r) alone, so for a non-empty cell
     ``assign_bins(x, ..., candidates=[r, *N(r)]) == r`` exactly when the global call gives
     r. The one exception needs an exact tie: a generator whose power cell has zero area
@@ -675,7 +275,7 @@ def neighbours(env: Environment, positions: np.ndarray,
     list of np.ndarray of int64
         R sorted index arrays; symmetric; an empty cell has no neighbours.
     """
-    q, rho2 = _check_generators(positions, power_weights)
+    q, rho2 = check_generators(positions, power_weights)
     n_gen = q.shape[0]
     polys = _power_cells(env, q, rho2) if cells is None else cells
     if len(polys) != n_gen:
@@ -729,7 +329,7 @@ class Partition:
     areas: np.ndarray
 
     def owners(self, grid: Grid) -> np.ndarray:
-        """:func:`bin_owners` of ``grid`` for these generators, shape (grid.size,)."""
+        """:func:`~.ownership.bin_owners` of ``grid`` for these generators, shape (grid.size,)."""
         return bin_owners(grid, self.positions, self.power_weights)
 
 
@@ -740,7 +340,7 @@ def partition(env: Environment, positions: np.ndarray,
     With ``power_weights=None`` this is the Voronoi partition of Dames (2020) eq. 7.
     Shapes and units are those of :class:`Partition`. Arrays in the result are read-only.
     """
-    q, rho2 = _check_generators(positions, power_weights)
+    q, rho2 = check_generators(positions, power_weights)
     rho = np.zeros(q.shape[0]) if power_weights is None else np.asarray(power_weights, float)
     polys = _power_cells(env, q, rho2)
     nbrs = neighbours(env, q, rho, cells=polys)

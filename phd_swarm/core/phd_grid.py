@@ -2,8 +2,8 @@
 
 Every function works on an arbitrary subset of bins given as flat indices (``iy * nx + ix``,
 see :mod:`phd_swarm.core.grid`) and the matching weights, so that the centralised filter
-(all bins, :mod:`phd_swarm.core.central`) and the distributed filter (each robot holds the
-bins of its Voronoi cell, Dames Sec. III) share one implementation.
+(all bins, :mod:`phd_swarm.core.estimators.central_phd`) and the distributed filter (each
+robot holds the bins of its Voronoi cell, Dames Sec. III) share one implementation.
 
 Units. A weight ``w_j`` is a *mass*: the expected number of targets in bin ``j``
 (dimensionless), i.e. ``v(x_j) * bin_area`` under the bin-centre rule. Likelihoods, the clutter
@@ -183,82 +183,6 @@ def update_weights(w: np.ndarray, pd: np.ndarray, psi_zx: np.ndarray,
     inv_eta = np.divide(1.0, eta, out=np.zeros_like(eta), where=eta > 0)
     gain = np.sum(psi_zx * inv_eta[:, None], axis=0)
     return (1.0 - pd) * w + gain * w
-
-
-def fov_positions(grid: Grid, models: PhdModels, flat: np.ndarray,
-                  sensor: np.ndarray) -> np.ndarray:
-    """Positions in ``flat`` of the bins with p_d > 0 for a sensor at ``sensor``.
-
-    The field-of-view disk is enumerated with :meth:`Grid.disk_bins` (cost O(FoV)) and
-    looked up in ``flat`` by binary search. ``flat`` should be strictly ascending (as
-    :meth:`Grid.disk_bins` and a robot's sorted cell are); otherwise it is sorted here first,
-    at O(K log K).
-
-    Parameters
-    ----------
-    grid : Grid
-    models : PhdModels
-        Supplies the detection radius.
-    flat : np.ndarray, shape (K,)
-        Flat indices of the bins held, without duplicates.
-    sensor : np.ndarray, shape (2,)
-        Sensor position q [m].
-
-    Returns
-    -------
-    np.ndarray of int64, shape (K_in,)
-        Indices ``p`` such that ``flat[p]`` are the held bins in the field of view, in
-        ascending bin order.
-    """
-    flat = np.asarray(flat, dtype=np.int64).reshape(-1)
-    disk = grid.disk_bins(sensor, models.detection.radius)
-    if flat.size == 0 or disk.size == 0:
-        return np.empty(0, dtype=np.int64)
-    order = None
-    if not np.all(flat[1:] > flat[:-1]):
-        order = np.argsort(flat, kind="stable")
-        flat = flat[order]
-        if np.any(flat[1:] == flat[:-1]):
-            raise ValueError("fov_positions: flat indices contain duplicates")
-    pos = np.searchsorted(flat, disk)
-    pos_c = np.minimum(pos, flat.size - 1)
-    pos = pos_c[flat[pos_c] == disk]
-    return pos if order is None else order[pos]
-
-
-def update_local(grid: Grid, models: PhdModels, flat: np.ndarray, w: np.ndarray,
-                 scan: Scan) -> np.ndarray:
-    """Apply one measurement set to the bins ``flat`` held by a single filter (eq. 4-6).
-
-    eta (eq. 5) is computed from these bins only, so this is the full update when the holder
-    has every bin of the field of view (a centralised filter, or a robot whose field of view
-    lies inside its cell, Dames Alg. 2 lines 1-2). Bins outside the field of view are
-    returned unchanged, bit for bit.
-
-    Parameters
-    ----------
-    grid : Grid
-    models : PhdModels
-    flat : np.ndarray, shape (K,)
-        Flat indices of the held bins, without duplicates (ascending is fastest).
-    w : np.ndarray, shape (K,)
-        Their predicted masses.
-    scan : Scan
-        Sensor position and measurements.
-
-    Returns
-    -------
-    np.ndarray, shape (K,)
-        Updated masses (a new array).
-    """
-    flat = np.asarray(flat, dtype=np.int64).reshape(-1)
-    out = np.array(w, dtype=float, copy=True).reshape(-1)
-    if out.shape != flat.shape:
-        raise ValueError(f"update_local: flat {flat.shape} and w {out.shape} differ in shape")
-    pos = fov_positions(grid, models, flat, scan.sensor)
-    if pos.size:
-        out[pos] = update_bins(grid, models, flat[pos], out[pos], scan)
-    return out
 
 
 def update_bins(grid: Grid, models: PhdModels, bins: np.ndarray, w: np.ndarray,

@@ -1,4 +1,7 @@
-"""Geometry of cells in array form: radii, bounding boxes, polygon distances, bin-index sets.
+"""Polygon geometry: areas, centroids, point-in-polygon tests, and cells in array form.
+
+The primitives of the cell polygons (:mod:`.partition`): area and centroid, point-in-polygon
+tests for one or many polygons at once, and polygons stacked into one vertex array.
 
 The helpers the distributed filter (:mod:`phd_swarm.core.exchange.voronoi_phd`) needs beside the
 partition itself (:mod:`.partition`): how far a cell reaches from its generator (the contact
@@ -12,7 +15,180 @@ from __future__ import annotations
 
 import numpy as np
 
-from .partition import points_in_polygon, points_in_polygons, stack_polygons
+
+def polygon_area(poly: np.ndarray) -> float:
+    """Area of a simple polygon by the shoelace formula [m^2], >= 0; (V, 2) -> float.
+
+    Polygons with fewer than 3 vertices have area 0.
+    """
+    p = np.asarray(poly, dtype=float).reshape(-1, 2)
+    if p.shape[0] < 3:
+        return 0.0
+    # Relative to the first vertex, so that far-from-origin polygons keep their precision.
+    p = p - p[0]
+    x, y = p[:, 0], p[:, 1]
+    return float(abs(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
+
+
+def polygon_centroid(poly: np.ndarray) -> np.ndarray:
+    """Centroid of a simple polygon's area [m], shape (2,); poly (V, 2).
+
+    A polygon of zero area (fewer than 3 vertices, or collinear ones) has the mean of its
+    vertices as centroid; an empty polygon (0 vertices) is an error.
+    """
+    p = np.asarray(poly, dtype=float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        raise ValueError("an empty polygon has no centroid")
+    origin = p[0]
+    r = p - origin
+    x, y = r[:, 0], r[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a2 = np.sum(cross)
+    scale = np.max(np.abs(r)) if r.size else 0.0
+    if p.shape[0] < 3 or abs(a2) <= 1e-14 * scale * scale:
+        return p.mean(axis=0)
+    cx = np.sum((x + xn) * cross) / (3.0 * a2)
+    cy = np.sum((y + yn) * cross) / (3.0 * a2)
+    return origin + np.array([cx, cy])
+
+
+def points_in_polygon(points: np.ndarray, poly: np.ndarray, tol: float = 0.0) -> np.ndarray:
+    """Whether each point lies in a convex counter-clockwise polygon grown by ``tol``.
+
+    A point is inside when its signed distance to every edge line is at most ``tol`` [m]
+    on the outer side: ``tol > 0`` also accepts points just outside (robust membership),
+    ``tol < 0`` only accepts points inside by more than ``-tol`` (strict interior).
+
+    Parameters
+    ----------
+    points : np.ndarray, shape (N, 2)
+        Query points [m].
+    poly : np.ndarray, shape (V, 2)
+        Convex polygon, counter-clockwise; V = 0 (empty cell) contains nothing.
+    tol : float
+        Margin [m].
+
+    Returns
+    -------
+    np.ndarray of bool, shape (N,)
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    v = np.asarray(poly, dtype=float).reshape(-1, 2)
+    if v.shape[0] < 3:
+        return np.zeros(p.shape[0], dtype=bool)
+    inside = np.ones(p.shape[0], dtype=bool)
+    for k in range(v.shape[0]):
+        a, b = v[k], v[(k + 1) % v.shape[0]]
+        edge = b - a
+        length = np.hypot(edge[0], edge[1])
+        if length == 0.0:
+            continue
+        # Left of a CCW edge is inside: cross(edge, p - a) / |edge| is the inward distance.
+        inward = (edge[0] * (p[:, 1] - a[1]) - edge[1] * (p[:, 0] - a[0])) / length
+        inside &= inward >= -tol
+    return inside
+
+
+def points_in_polygons(points: np.ndarray, polys: list[np.ndarray],
+                       tol: float = 0.0) -> np.ndarray:
+    """:func:`points_in_polygon` of every point in every polygon, in one array operation.
+
+    ``points_in_polygons(p, polys, tol)[:, i] == points_in_polygon(p, polys[i], tol)``
+    exactly: the edges of all polygons are stacked and the same float expressions are
+    evaluated for every (point, edge) pair, so the cost is O(N x total vertices).
+
+    Parameters
+    ----------
+    points : np.ndarray, shape (N, 2)
+        Query points [m].
+    polys : list of np.ndarray, each shape (V_i, 2)
+        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
+    tol : float
+        Margin [m], as in :func:`points_in_polygon`.
+
+    Returns
+    -------
+    np.ndarray of bool, shape (N, len(polys))
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
+    inside = np.zeros((p.shape[0], len(polys)), dtype=bool)
+    real = [i for i, v in enumerate(polys) if v.shape[0] >= 3]
+    if real and p.shape[0]:
+        a, starts, nxt = stack_polygons([polys[i] for i in real])
+        edge = a[nxt] - a
+        length = np.hypot(edge[:, 0], edge[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inward = (edge[:, 0] * (p[:, 1:2] - a[:, 1]) - edge[:, 1] * (p[:, 0:1] - a[:, 0])) \
+                / length
+        # Zero-length edges are skipped, as in points_in_polygon.
+        ok = (inward >= -tol) | (length == 0.0)
+        inside[:, real] = np.logical_and.reduceat(ok, starts, axis=1)
+    return inside
+
+
+def points_in_any_polygon(points: np.ndarray, polys: list[np.ndarray],
+                          tol: float = 0.0) -> np.ndarray:
+    """Whether each point lies in at least one of ``polys`` (each grown by ``tol``).
+
+    :func:`points_in_polygons` or-ed over the polygons, taken in groups of about 2**16
+    (point, vertex) pairs; the points already inside a polygon are not tested against the
+    later groups.
+
+    Parameters
+    ----------
+    points : np.ndarray, shape (N, 2)
+        Query points [m].
+    polys : list of np.ndarray, each shape (V_i, 2)
+        Convex counter-clockwise polygons; those with fewer than 3 vertices contain nothing.
+    tol : float
+        Margin [m], as in :func:`points_in_polygon`.
+
+    Returns
+    -------
+    np.ndarray of bool, shape (N,)
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    inside = np.zeros(p.shape[0], dtype=bool)
+    polys = [np.asarray(v, dtype=float).reshape(-1, 2) for v in polys]
+    first = 0
+    while first < len(polys) and not inside.all():
+        rest = np.flatnonzero(~inside)
+        n_vertices, last = 0, first
+        while last < len(polys) and (last == first or
+                                     rest.size * (n_vertices + len(polys[last])) <= 1 << 16):
+            n_vertices += len(polys[last])
+            last += 1
+        inside[rest] = points_in_polygons(p[rest], polys[first:last], tol).any(axis=1)
+        first = last
+    return inside
+
+
+def stack_polygons(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All vertices of several polygons in one array, for edge-wise array operations.
+
+    Parameters
+    ----------
+    polys : list of np.ndarray, each shape (V_i, 2), V_i >= 1
+
+    Returns
+    -------
+    vertices : np.ndarray, shape (V, 2)
+        The polygons' vertices one after the other, V = sum V_i.
+    starts : np.ndarray of int64, shape (len(polys),)
+        Row of each polygon's first vertex (for ``ufunc.reduceat``).
+    following : np.ndarray of int64, shape (V,)
+        Row of the next vertex of the same polygon (its first after its last), so that
+        ``vertices[following] - vertices`` are the edges, as ``np.roll(poly, -1, axis=0)
+        - poly`` per polygon.
+    """
+    sizes = np.array([len(v) for v in polys], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(sizes[:-1])]).astype(np.int64)
+    vertices = np.concatenate(polys).reshape(-1, 2)
+    following = np.arange(1, vertices.shape[0] + 1)
+    following[starts + sizes - 1] = starts
+    return vertices, starts, following
 
 
 def cell_radius(q: np.ndarray, cell: np.ndarray) -> float:

@@ -1,10 +1,19 @@
-"""One sensor's measurement set Z_r^t (Dames Sec. II) as a plain value."""
+"""One sensor's measurement set Z_r^t (Dames Sec. II) as a plain value.
+
+The one scan type: the world's output, the filters' input, and the ``voronoi_phd``
+exchange's ``MeasurementSet`` message (:mod:`phd_swarm.core.exchange.voronoi_phd.messages`).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+#: Estimated CDR sizes [bytes] for the communication benchmark: 4-byte encapsulation, a
+#: header with stamp and a short frame id ("map"), and a geometry_msgs/Point.
+CDR_HEADER = 4 + 8 + 4 + 4
+CDR_POINT = 24
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,3 +47,7 @@ class Scan:
             raise ValueError(f"scan of robot {self.robot_id}: measurements must be finite")
         object.__setattr__(self, "sensor", sensor)
         object.__setattr__(self, "z", z)
+
+    def wire_size(self) -> int:
+        """Estimated CDR payload size of the ``MeasurementSet`` message [bytes]."""
+        return CDR_HEADER + 4 + 4 + CDR_POINT + 4 + CDR_POINT * len(self.z)

@@ -1,24 +1,24 @@
 """The central engine: the team's filter and controllers computed as one, for sweeps.
 
-The distributed filter (Dames 2020 Alg. 1-2) computes the centralised grid PHD filter's
-team PHD (eq. 3-6), up to the rounding of sums taken in another order
-(``test/engines/test_distributed.py``): what each robot holds is the team PHD over its own cell. So
-a run of the papers' algorithms can be computed without the protocol, as the papers' own
-simulations are: one :class:`~phd_swarm.core.central.CentralPhdFilter` over the whole map,
-one partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of
-Dames eq. 7 when every power weight is 0), and each robot's controller (the same
-registered controller objects and generators the agents have,
-:mod:`phd_swarm.core.controllers`) on its own cell, bins and masses. It runs the systems
-whose estimator has a central form (``grid_phd``) and whose exchange partitions the map
-(``voronoi_phd``); other systems run on the distributed engine. Chen's
-cumulative state (eq. 9-10) is counted per bin: alpha and n are whole numbers, so they are
-exactly those the robots carry.
+The distributed filter (Dames 2020 Alg. 1-2) computes the centralised grid PHD filter's team
+PHD (eq. 3-6), up to the rounding of sums taken in another order
+(``test/engines/test_distributed.py``): what each robot holds is the team PHD over its own
+cell. So a run of the papers' algorithms can be computed without the protocol, as the
+papers' own simulations are: one
+:class:`~phd_swarm.core.estimators.central_phd.CentralPhdFilter` over the whole map, one
+partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of Dames
+eq. 7 when every power weight is 0), and each robot's controller (the same registered
+controller objects and generators the agents have, :mod:`phd_swarm.core.controllers`) on its
+own cell, bins and masses. It runs the systems whose estimator has a central form
+(``grid_phd``) and whose exchange partitions the map (``voronoi_phd``); other systems run on
+the distributed engine. Chen's cumulative state (eq. 9-10) is counted per bin: alpha and n
+are whole numbers, so they are exactly those the robots carry.
 
 One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
 
 1. the world gives each live robot its measurement set Z^k at its position q^k;
 2. the cells of q^k with the power weights of the previous decisions partition the bins
-   (ties to the lower robot id, as in :func:`~phd_swarm.core.partition.assign_bins`);
+   (ties to the lower robot id, as in :func:`~phd_swarm.core.ownership.assign_bins`);
 3. the filter predicts (eq. 3; per cell when the motion kernel is convolved by FFT, see
    :meth:`CentralEngine._predict_per_cell`) and updates with the sets in increasing robot
    id (eq. 4-6, Alg. 2 line 10); every scan counts one observation of the bins in its
@@ -42,7 +42,8 @@ from phd_swarm.core import phd_grid
 from phd_swarm.core.agent import Team, robot_generator
 from phd_swarm.core.controllers.base import CellDensity, Knowledge
 from phd_swarm.core.cumulative import observe_scans
-from phd_swarm.core.partition import bin_owners, cell_of
+from phd_swarm.core.ownership import bin_owners
+from phd_swarm.core.partition import cell_of
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.world import World

@@ -47,7 +47,7 @@ from itertools import groupby
 import numpy as np
 
 from phd_swarm.core.agent import Team
-from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.estimators.central_phd import CentralPhdFilter
 from phd_swarm.core.exchange.base import Envelope
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
 from phd_swarm.core.exchange.voronoi_phd.context import TIMEOUT_TICKS
@@ -62,7 +62,7 @@ class DeadlockError(RuntimeError):
 
 
 #: ``msg_defs`` names of the protocol messages other than transfers, by class name.
-_TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "ScanMsg": "MeasurementSet",
+_TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "Scan": "MeasurementSet",
                "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}
 
 

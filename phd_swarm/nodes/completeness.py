@@ -166,6 +166,23 @@ def ranges(steps: Iterable[int]) -> str:
     return ", ".join(out)
 
 
+def reporters(alive_at_k, alive_at_next=None):
+    """The robots whose step-k outputs make up step k: alive at k and still at k+1.
+
+    A robot the world counts dead after step k (killed, or silent past its deadline) may or
+    may not have reported k, so nothing of it is expected; without a step k+1 (the last
+    step) it is those alive at k. The one rule of every check that a step is complete: the
+    recorder's and the log check's (boolean arrays over steps), the monitor's and the log
+    reader's (sets of ids).
+
+    Parameters
+    ----------
+    alive_at_k, alive_at_next : frozenset of int, or np.ndarray of bool
+        Who was alive at step k and at step k+1 (None: no step k+1).
+    """
+    return alive_at_k if alive_at_next is None else alive_at_k & alive_at_next
+
+
 def alive_matrix(team: Mapping[int, np.ndarray], robots: int, steps: int) -> np.ndarray:
     """Alive flags (steps + 1, robots) from the team states ``team`` (step -> flags (R,)).
 
@@ -219,7 +236,7 @@ def check(recorded: Mapping[str, Iterable[int]], team: Mapping[int, np.ndarray],
             if kind in ROBOT_INPUTS:
                 want = np.flatnonzero(alive[:-1, r])
             else:
-                want = np.flatnonzero(alive[:-1, r] & alive[1:, r])
+                want = np.flatnonzero(reporters(alive[:-1, r], alive[1:, r]))
         have = np.fromiter(set(recorded.get(name, ())), dtype=np.int64)
         missing = np.setdiff1d(want, have, assume_unique=True)
         out[name] = TopicCompleteness(int(want.size), int(want.size - missing.size),

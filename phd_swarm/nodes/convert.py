@@ -25,12 +25,12 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
     EtaPartialMsg,
     EtaTotalMsg,
     Message,
-    ScanMsg,
     StateMsg,
     TransferKind,
     TransferMsg,
 )
 from phd_swarm.core.grid import Grid
+from phd_swarm.core.scan import Scan
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
@@ -132,7 +132,7 @@ def to_ros(msg: Message, dt: float, frame_id: str):
                            contact_positions=points(msg.contact_positions),
                            contact_power_weights=f64(msg.contact_power_weights),
                            contact_cell_radii=f64(msg.contact_cell_radii))
-    if isinstance(msg, ScanMsg):
+    if isinstance(msg, Scan):
         return MeasurementSet(header=h, robot_id=msg.robot_id, step=msg.step,
                               sensor_position=Point(x=float(msg.sensor[0]),
                                                     y=float(msg.sensor[1])),
@@ -235,12 +235,12 @@ def _eta_values(seq, max_measurements: int) -> np.ndarray:
     return v
 
 
-def scan_from_ros(msg: MeasurementSet, max_measurements: int) -> ScanMsg:
-    """``MeasurementSet`` -> :class:`ScanMsg`, checking count and finiteness."""
+def scan_from_ros(msg: MeasurementSet, max_measurements: int) -> Scan:
+    """``MeasurementSet`` -> :class:`~phd_swarm.core.scan.Scan`, checking count and finiteness."""
     if len(msg.measurements) > max_measurements:
         raise InvalidMessage(f"measurements: {len(msg.measurements)} measurements, more than "
                              f"max_measurements = {max_measurements}")
-    return ScanMsg(msg.robot_id, msg.step, point_xy(msg.sensor_position, "sensor_position"),
+    return Scan(msg.robot_id, msg.step, point_xy(msg.sensor_position, "sensor_position"),
                    xy(msg.measurements, "measurements"))
 
 

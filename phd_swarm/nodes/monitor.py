@@ -35,7 +35,7 @@ from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_step, series_summary
-from phd_swarm.nodes import convert
+from phd_swarm.nodes import completeness, convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
 from phd_swarm.nodes.params import declare, declare_scenario
@@ -179,7 +179,7 @@ class MonitorNode(Node):
         later = self.alive.get(k + 1)
         if later is None:
             return None
-        return self.alive[k] & later
+        return completeness.reporters(self.alive[k], later)
 
     def _process_ready_steps(self, force: bool = False) -> None:
         while not self.done and self.next_step < self.scenario.steps:

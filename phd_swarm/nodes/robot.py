@@ -67,8 +67,9 @@ from phd_swarm.config.node_params import ROBOT, SHARED
 from phd_swarm.core.agent import Team
 from phd_swarm.core.exchange.base import Envelope
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
-from phd_swarm.core.exchange.voronoi_phd.messages import Message, ScanMsg
+from phd_swarm.core.exchange.voronoi_phd.messages import Message
 from phd_swarm.core.exchange.voronoi_phd.participant import ProtocolError
+from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
@@ -127,7 +128,7 @@ class RobotNode(Node):
         self.team_ids: frozenset[int] = frozenset()
         self.initialised = False
         self.ready = False
-        self.pending: deque[ScanMsg] = deque()
+        self.pending: deque[Scan] = deque()
         self.last_scan_step = -1
         self.counters: dict[str, int] = defaultdict(int)
         self.rejections: dict[str, int] = defaultdict(int)

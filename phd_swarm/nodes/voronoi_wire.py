@@ -11,11 +11,11 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
     EtaPartialMsg,
     EtaTotalMsg,
     Message,
-    ScanMsg,
     StateMsg,
     TransferMsg,
     sender_of,
 )
+from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.wire import Wire
 from phd_swarm_msgs.msg import (
@@ -28,7 +28,7 @@ from phd_swarm_msgs.msg import (
 )
 
 #: Inbox kind of each core message type.
-KINDS = {StateMsg: "state", CellMsg: "cell", ScanMsg: "measurements",
+KINDS = {StateMsg: "state", CellMsg: "cell", Scan: "measurements",
          EtaPartialMsg: "eta_partial", EtaTotalMsg: "eta_total", TransferMsg: "particles"}
 
 

@@ -444,8 +444,10 @@ def render_parameters() -> str:
                   for flat in defaults.values()]
         rows.append([f"`scenario.{key}`", *values, meaning])
     scenario_table = _table(("parameter", *defaults, "meaning"), rows)
-    parts = [registry.lookup(role, name) for role in registry.ROLES
-             for name in registry.names(role)]
+    # The package's own parts: a plugin a test or sweep has loaded into this process is
+    # not part of the docs.
+    parts = [part for role in registry.ROLES for name in registry.names(role)
+             if (part := registry.lookup(role, name)).make.__module__.startswith("phd_swarm.")]
     parts_table = _table(("role", "name", "options", "provides", "requires", "description"),
                          [[p.role, f"`{p.name}`",
                            ", ".join(f"`{o.name}`" for o in p.options) or "-",

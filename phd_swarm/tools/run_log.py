@@ -38,6 +38,7 @@ from phd_swarm.core.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.completeness import reporters
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm_msgs.msg import (
     CellPolygon,
@@ -167,9 +168,8 @@ class RunLog:
 
     def expected_windows(self, k: int) -> frozenset[int]:
         """Robots whose windows make up step k: alive at k and at k+1 (the monitor's rule)."""
-        rec = self.steps[k]
         later = self.steps.get(k + 1)
-        return rec.alive & later.alive if later is not None else rec.alive
+        return reporters(self.steps[k].alive, None if later is None else later.alive)
 
     def cumulative_images(self, steps: Iterable[int], mode: str | None = None
                           ) -> dict[int, np.ndarray]:

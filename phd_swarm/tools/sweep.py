@@ -500,6 +500,45 @@ def _log_session(out: Path, session: dict[str, Any]) -> dict[str, Any]:
     return doc
 
 
+def pick_for_recheck(done: list[Trial], n: int) -> list[Trial]:
+    """The ``n`` cheapest of ``done`` (:meth:`Trial.cost`), one method after the other."""
+    by_method: dict[str, list[Trial]] = {}
+    for t in sorted(done, key=lambda t: (t.cost(), t.key)):
+        by_method.setdefault(t.method, []).append(t)
+    picked: list[Trial] = []
+    while len(picked) < n and any(by_method.values()):
+        for queue in by_method.values():
+            if queue and len(picked) < n:
+                picked.append(queue.pop(0))
+    return picked
+
+
+def recheck(done: list[Trial], results: ResultsFile, n: int) -> bool:
+    """Re-run ``n`` finished trials (:func:`pick_for_recheck`) and compare with their rows.
+
+    Every column but :data:`TIMING_COLUMNS` and ``spec`` must come out the same, after the
+    same trip through the CSV text (so floats compare as stored). Prints one line per
+    trial; returns whether all agree.
+    """
+    ok = True
+    for trial in pick_for_recheck(done, n):
+        stored = results.rows[trial.key]
+        row, _ = run_trial(trial)
+        row["spec"] = stored["spec"]
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=COLUMNS)
+        w.writeheader()
+        w.writerow(row)
+        fresh = parse_row(next(csv.DictReader(io.StringIO(buf.getvalue()))))
+        diff = [c for c in COLUMNS if c not in TIMING_COLUMNS and fresh[c] != stored[c]]
+        ok &= not diff
+        verdict = "same" if not diff else "DIFFERS in " + ", ".join(
+            f"{c} ({stored[c]!r} -> {fresh[c]!r})" for c in diff)
+        print(f"recheck {trial.key}: {trial.metric} OSPA {stored['value']:.6f} m stored, "
+              f"{fresh['value']:.6f} m now: {verdict} ({row['wall_s']:.1f} s)", flush=True)
+    return ok
+
+
 def default_out(spec: SweepSpec) -> Path:
     """Where a sweep writes by default, under the repository (``$PHD_SWARM_ROOT``) or here.
 
@@ -536,6 +575,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    help="only redraw the plots and summary from the existing results")
     p.add_argument("--dry-run", action="store_true",
                    help="print how many trials would run and exit")
+    p.add_argument("--recheck", type=int, default=0, metavar="N",
+                   help="re-run the N cheapest finished trials (of different methods where "
+                        "there are several) and compare every column but the timings with "
+                        "the stored rows; exit 1 if any differs")
     opts = p.parse_args(argv)
     if opts.workers < 1:
         p.error(f"--workers must be >= 1, got {opts.workers}")
@@ -565,6 +608,8 @@ def main(argv: list[str] | None = None) -> int:
               f"ignored", flush=True)
     if opts.dry_run:
         return 0
+    if opts.recheck:
+        return 0 if recheck(done, results, opts.recheck) else 1
     from phd_swarm.tools.sweep_plots import write_report
 
     failed: dict[str, str] = {}

@@ -7,6 +7,8 @@ import numpy as np
 from phd_swarm.core import registry
 from phd_swarm.core.agent import Agent, Team, robot_generator
 from phd_swarm.core.controllers.base import Controller, Decision
+from phd_swarm.core.estimators.base import Estimator
+from phd_swarm.core.exchange.base import Exchange
 from phd_swarm.core.exchange.voronoi_phd.participant import Participant
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc
@@ -64,3 +66,96 @@ def test_the_engine_steps_every_robot_through_its_agent_with_its_generator():
         assert len({tuple(np.round(s, 9)) for s in steps}) == 4, "each its own stream"
     finally:
         registry._PARTS["controller"].pop("test_jitter")
+
+
+class _CountingEstimator(Estimator):
+    """Test estimator: counts the scans it is given, remembers the last."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+        self.last = None
+
+    def predict(self) -> None:
+        self.calls.append("predict")
+
+    def update(self, scan) -> None:
+        self.calls.append("update")
+        self.last = scan
+
+    def estimates(self) -> np.ndarray:
+        return np.empty((0, 2))
+
+    def expected_count(self) -> float:
+        return float(len(self.calls))
+
+
+class _Silent(Exchange):
+    """Test exchange: a robot that tells nobody anything (one robot, Sung & Tokekar)."""
+
+    def __init__(self) -> None:
+        self._step = -1
+
+    def initialise(self, ids, positions) -> None:
+        pass
+
+    def observe_team(self, step, ids, positions, alive) -> None:
+        pass
+
+    def rejoin(self, step, ids, positions, alive) -> None:
+        pass
+
+    def start_step(self, step, position, power_weight, z):
+        self._step = step
+        return []
+
+    def receive(self, msg) -> bool:
+        return False
+
+    def advance(self):
+        return []
+
+    def tick(self):
+        return []
+
+    @property
+    def done(self) -> bool:
+        return True
+
+    @property
+    def step(self) -> int:
+        return self._step
+
+
+def test_an_estimator_of_its_own_is_driven_by_the_agent_before_the_exchange():
+    names = {"estimator": "test_counting", "exchange": "test_silent",
+             "controller": "test_sees_estimator"}
+    seen = []
+
+    class _Sees(Controller):
+        def decide(self, knowledge, rng):
+            seen.append((knowledge.step, knowledge.estimator.last.step,
+                         len(knowledge.estimator.calls)))
+            return Decision(goal=knowledge.position)
+
+    registry.register("estimator", names["estimator"], lambda s, r: _CountingEstimator(),
+                      description="test", provides=("grid_density",))
+    registry.register("exchange", names["exchange"], lambda s, r: _Silent(),
+                      description="test")
+    registry.register("controller", names["controller"], lambda s, r: _Sees(),
+                      description="test")
+    try:
+        team = Team.build(_scenario().with_system(**names))
+        agent = team.agent(0)
+        for k in range(3):
+            assert agent.start_step(k, np.array([1.0, 2.0]), np.array([[1.0, 1.0]])) == []
+            assert agent.done
+            agent.finish_step()
+        assert seen == [(0, 0, 2), (1, 1, 4), (2, 2, 6)], "predict + update, then decide"
+        assert agent.estimator.last.robot_id == 0
+        np.testing.assert_array_equal(agent.estimator.last.sensor, [1.0, 2.0])
+        # Dames' grid PHD is run by its exchange: the agent does not touch it.
+        grid = Team.build(_scenario()).agent(0)
+        assert not grid._runs_estimator
+    finally:
+        for role, name in names.items():
+            registry._PARTS[role].pop(name)

@@ -8,32 +8,38 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from phd_swarm.core.cumulative import (
-    CumulativeConfig,
     chen_lloyd_weights,
-    cumulative_init,
-    cumulative_update,
+    cumulative_update_counts,
     cumulative_weight,
+    observe_scans,
     power_weight,
 )
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.grid import Environment, Grid
 
 
-def observe(rewards: list[bool], size: int = 1, fov=None) -> tuple[np.ndarray, np.ndarray]:
-    """Apply one scan per reward to a fresh state; every bin in view unless ``fov``."""
-    alpha, n = cumulative_init(size)
-    fov = np.ones(size, dtype=bool) if fov is None else fov
+def fresh(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Chen Alg. 1 line 3: alpha = 0, n = 0 (beta = inf)."""
+    return np.zeros(size), np.zeros(size, dtype=np.int64)
+
+
+def scan(alpha, n, fov: np.ndarray, has_measurement: bool):
+    """One scan's eq. 9-10 on the bins of mask ``fov``: one observation, a reward if any."""
+    obs = fov.astype(np.int64)
+    return cumulative_update_counts(alpha, n, obs, obs * int(has_measurement))
+
+
+def observe(rewards: list[bool], size: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Apply one scan per reward to a fresh state, every bin in view."""
+    alpha, n = fresh(size)
     for r in rewards:
-        alpha, n = cumulative_update(alpha, n, fov, r)
+        alpha, n = scan(alpha, n, np.ones(size, dtype=bool), r)
     return alpha, n
 
 
 # ---------------------------------------------------------------- eq. 9-11 by hand
 
 def test_initial_state() -> None:
-    alpha, n = cumulative_init(4)
-    np.testing.assert_array_equal(alpha, np.zeros(4))
-    np.testing.assert_array_equal(n, np.zeros(4, dtype=np.int64))
-    assert n.dtype == np.int64
+    alpha, n = fresh(4)
     for mode in ("rate", "literal"):
         np.testing.assert_array_equal(cumulative_weight(alpha, n, mode), np.zeros(4))
 
@@ -50,10 +56,10 @@ def test_three_observations_rewards_1_0_1() -> None:
 def test_beta_is_inverse_count() -> None:
     # Eq. 9 from beta = inf: (inf^-1 + 1)^-1 = 1, then 1/2, 1/3, ...
     beta = np.inf
-    alpha, n = cumulative_init(1)
+    alpha, n = fresh(1)
     for _ in range(5):
         beta = 1.0 / (1.0 / beta + 1.0)
-        alpha, n = cumulative_update(alpha, n, np.array([0]), False)
+        alpha, n = scan(alpha, n, np.array([True]), False)
         assert beta == pytest.approx(1.0 / n[0])
 
 
@@ -76,7 +82,7 @@ def test_alpha_below_one_gives_zero(mode: str) -> None:
 
 def test_laplace_is_the_rule_of_succession() -> None:
     # Unobserved: 1/2; rewards 1, 0, 1: (2 + 1) / (3 + 2); ten empty scans: 1/12.
-    alpha, n = cumulative_init(1)
+    alpha, n = fresh(1)
     assert cumulative_weight(alpha, n, "laplace")[0] == 0.5
     alpha, n = observe([True, False, True])
     assert cumulative_weight(alpha, n, "laplace")[0] == pytest.approx(3.0 / 5.0)
@@ -101,49 +107,49 @@ def test_one_reward_gives_zero_mode() -> None:
     assert cumulative_weight(alpha, n, "literal")[0] == 0.0
 
 
-def test_bins_outside_fov_unchanged_mask() -> None:
+def test_bins_outside_fov_unchanged() -> None:
     alpha = np.array([0.0, 2.0, 5.0, 1.0])
     n = np.array([0, 3, 9, 1])
     fov = np.array([False, True, False, True])
-    new_alpha, new_n = cumulative_update(alpha, n, fov, True)
+    new_alpha, new_n = scan(alpha, n, fov, True)
     np.testing.assert_array_equal(new_alpha, [0.0, 3.0, 5.0, 2.0])
     np.testing.assert_array_equal(new_n, [0, 4, 9, 2])
-    new_alpha, new_n = cumulative_update(alpha, n, fov, False)
+    new_alpha, new_n = scan(alpha, n, fov, False)
     np.testing.assert_array_equal(new_alpha, alpha)
     np.testing.assert_array_equal(new_n, [0, 4, 9, 2])
 
 
-def test_indices_equal_mask_and_duplicates_count_once() -> None:
-    alpha, n = np.array([0.0, 1.0, 1.0, 2.0, 0.0]), np.array([0, 1, 2, 3, 4])
-    by_idx = cumulative_update(alpha, n, np.array([3, 1, 1]), True)
-    by_mask = cumulative_update(alpha, n, np.array([False, True, False, True, False]), True)
-    for a, b in zip(by_idx, by_mask, strict=True):
-        np.testing.assert_array_equal(a, b)
-    np.testing.assert_array_equal(by_idx[0], [0.0, 2.0, 1.0, 3.0, 0.0])
-    np.testing.assert_array_equal(by_idx[1], [0, 2, 2, 4, 4])
-
-
-def test_empty_fov_changes_nothing() -> None:
-    alpha, n = np.array([1.0, 2.0]), np.array([3, 4])
-    for fov in (np.array([], dtype=np.int64), [], np.zeros(2, dtype=bool)):
-        new_alpha, new_n = cumulative_update(alpha, n, fov, True)
-        np.testing.assert_array_equal(new_alpha, alpha)
-        np.testing.assert_array_equal(new_n, n)
-
-
-def test_update_is_pure() -> None:
+def test_counts_are_pure_and_checked() -> None:
     alpha, n = np.array([1.0, 2.0]), np.array([3, 4])
     a0, n0 = alpha.copy(), n.copy()
-    new_alpha, new_n = cumulative_update(alpha, n, np.array([True, True]), True)
+    new_alpha, new_n = cumulative_update_counts(alpha, n, np.array([2, 1]), np.array([1, 0]))
     np.testing.assert_array_equal(alpha, a0)
     np.testing.assert_array_equal(n, n0)
-    assert new_alpha is not alpha and new_n is not n
-
-
-def test_float_counts_accepted() -> None:
-    new_alpha, new_n = cumulative_update([0.0, 1.0], np.array([0.0, 2.0]), [1], True)
-    np.testing.assert_array_equal(new_n, [0, 3])
+    np.testing.assert_array_equal(new_alpha, [2.0, 2.0])
+    np.testing.assert_array_equal(new_n, [5, 5])
     assert new_n.dtype == np.int64
+    for obs, rew in ((np.array([1, 1]), np.array([2, 0])), (np.array([1, 1]), [-1, 0]),
+                     (np.array([1.0, 1.0]), np.array([0, 0]))):
+        with pytest.raises(ValueError):
+            cumulative_update_counts(alpha, n, obs, np.asarray(rew))
+
+
+def test_observe_scans_counts_every_scan_of_the_step_in_place() -> None:
+    grid = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)
+    alpha, n = fresh(grid.size)
+    z = np.array([[2.0, 2.0]])
+    scans = [(np.array([2.5, 2.5]), z), (np.array([3.5, 2.5]), np.empty((0, 2)))]
+    observe_scans(grid, 1.0, alpha, n, scans)
+    a = grid.disk_bins(scans[0][0], 1.0)
+    b = grid.disk_bins(scans[1][0], 1.0)
+    expect_n = np.zeros(grid.size, dtype=np.int64)
+    expect_n[a] += 1
+    expect_n[b] += 1
+    expect_alpha = np.zeros(grid.size)
+    expect_alpha[a] += 1.0
+    np.testing.assert_array_equal(n, expect_n)
+    np.testing.assert_array_equal(alpha, expect_alpha)
+    assert n.max() == 2, "a bin in both fields of view is observed twice"
 
 
 # ---------------------------------------------------------------- rate vs literal
@@ -189,9 +195,9 @@ def test_random_fov_sequences(seed: int) -> None:
     size, steps = 12, 25
     masks = rng.random((steps, size)) < 0.4
     rewards = rng.random(steps) < 0.5
-    alpha, n = cumulative_init(size)
+    alpha, n = fresh(size)
     for mask, r in zip(masks, rewards, strict=True):
-        alpha, n = cumulative_update(alpha, n, mask, bool(r))
+        alpha, n = scan(alpha, n, mask, bool(r))
     np.testing.assert_array_equal(n, masks.sum(axis=0))
     np.testing.assert_array_equal(alpha, (masks & rewards[:, None]).sum(axis=0))
     rate = cumulative_weight(alpha, n, "rate")
@@ -265,29 +271,7 @@ def test_power_weight_from_cell_sums_eq13_eq14() -> None:
     assert power_weight(np.zeros(5).sum(), 141.0) == 141.0
 
 
-# ---------------------------------------------------------------- config, Alg. 1
-
-def test_config_defaults_and_rho_max_for() -> None:
-    cfg = CumulativeConfig()
-    assert cfg.mode == "rate" and cfg.rho_max is None
-    env = Environment(0.0, 0.0, 30.0, 40.0)
-    assert cfg.rho_max_for(env) == pytest.approx(50.0)
-    assert CumulativeConfig(rho_max=12.0).rho_max_for(env) == 12.0
-    assert CumulativeConfig(mode="literal").mode == "literal"
-
-
-@pytest.mark.parametrize("kwargs", [{"mode": "Rate"}, {"mode": "mean"}, {"rho_max": 0.0},
-                                    {"rho_max": -1.0}, {"rho_max": np.inf},
-                                    {"rho_max": np.nan}])
-def test_config_validation(kwargs) -> None:
-    with pytest.raises(ValueError, match="cumulative."):
-        CumulativeConfig(**kwargs)
-
-
-def test_config_is_frozen() -> None:
-    with pytest.raises(AttributeError):
-        CumulativeConfig().mode = "literal"  # type: ignore[misc]
-
+# ---------------------------------------------------------------- Alg. 1
 
 def test_chen_lloyd_weights_idle_and_busy() -> None:
     phd = np.array([0.1, 0.7, 0.0])
@@ -321,22 +305,11 @@ def test_chen_lloyd_weights_validation() -> None:
     (np.zeros(2), np.array([True, False]), "n "),
 ])
 def test_state_validation(alpha, n, match: str) -> None:
+    counts = np.zeros(np.shape(alpha), dtype=np.int64)
     with pytest.raises(ValueError, match=match):
-        cumulative_update(alpha, n, np.array([0]), True)
+        cumulative_update_counts(alpha, n, counts, counts)
     with pytest.raises(ValueError, match=match):
         cumulative_weight(alpha, n)
-
-
-@pytest.mark.parametrize("fov", [np.zeros(3, dtype=bool), np.array([5]), np.array([-1]),
-                                 np.array([0.5]), np.zeros((2, 2), dtype=np.int64)])
-def test_fov_validation(fov) -> None:
-    with pytest.raises(ValueError, match="in_fov"):
-        cumulative_update(np.zeros(4), np.zeros(4), fov, True)
-
-
-def test_has_measurement_must_be_bool() -> None:
-    with pytest.raises(ValueError, match="has_measurement"):
-        cumulative_update(np.zeros(2), np.zeros(2), [0], 1)  # type: ignore[arg-type]
 
 
 def test_weight_mode_validation() -> None:

@@ -9,15 +9,14 @@ from hypothesis import strategies as st
 
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.lloyd import (
-    Weighting,
     centroid_goal,
     control_step,
-    lloyd_weights,
     next_position,
     step_length,
     weighted_centroid,
 )
-from phd_swarm.core.partition import bin_owners, partition
+from phd_swarm.core.ownership import bin_owners
+from phd_swarm.core.partition import partition
 
 GRID = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)
 SQUARE = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
@@ -30,7 +29,7 @@ def _rectangle_of_bins(ix0: int, ix1: int, iy0: int, iy1: int) -> np.ndarray:
 
 def test_uniform_weights_give_the_centre_of_a_rectangle_of_bins():
     idx = _rectangle_of_bins(2, 5, 3, 8)  # centres x 2.5..5.5, y 3.5..8.5
-    w = lloyd_weights("uniform", idx.size)
+    w = np.ones(idx.size)
     goal = centroid_goal(GRID, idx, w, SQUARE, np.array([9.0, 9.0]))
     np.testing.assert_allclose(goal, [4.0, 6.0], rtol=0, atol=1e-12)
 
@@ -42,7 +41,7 @@ def test_a_single_weighted_bin_is_the_goal():
     goal = centroid_goal(GRID, idx, w, SQUARE, np.array([1.0, 1.0]))
     np.testing.assert_array_equal(goal, [2.5, 7.5])
     # A heavy bin among light ones pulls the centroid most of the way.
-    w = lloyd_weights(Weighting.PHD, idx.size, phd=np.full(idx.size, 1e-4) + w * 1e3)
+    w = np.full(idx.size, 1e-4) + w * 1e3
     goal = centroid_goal(GRID, idx, w, SQUARE, np.array([1.0, 1.0]))
     assert np.linalg.norm(goal - [2.5, 7.5]) < 0.01
 
@@ -82,24 +81,6 @@ def test_weight_errors_name_the_problem():
         weighted_centroid(x, np.array([1.0, np.nan]), np.zeros(2))
     with pytest.raises(ValueError, match="fallback"):
         weighted_centroid(x, np.ones(2), np.zeros(3))
-
-
-def test_lloyd_weights():
-    np.testing.assert_array_equal(lloyd_weights("uniform", 3), np.ones(3))
-    phd = np.array([0.1, 0.0, 0.2])
-    w = lloyd_weights("phd", 3, phd=phd)
-    np.testing.assert_array_equal(w, phd)
-    w[0] = 9.0
-    assert phd[0] == 0.1
-    np.testing.assert_array_equal(lloyd_weights("cumulative", 3, cumulative=phd * 2), phd * 2)
-    with pytest.raises(ValueError, match="unknown weighting"):
-        lloyd_weights("entropy", 3)
-    with pytest.raises(ValueError, match="needs the cumulative"):
-        lloyd_weights("cumulative", 3, phd=phd)
-    with pytest.raises(ValueError, match="shape"):
-        lloyd_weights("phd", 4, phd=phd)
-    with pytest.raises(ValueError, match="non-negative"):
-        lloyd_weights("phd", 3, phd=-phd)
 
 
 def test_step_length():

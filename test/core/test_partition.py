@@ -9,16 +9,9 @@ from hypothesis import strategies as st
 
 from phd_swarm.core import partition as part
 from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.partition import (
-    assign_bins,
-    bin_owners,
-    cells,
-    neighbours,
-    partition,
-    points_in_polygon,
-    polygon_area,
-    polygon_centroid,
-)
+from phd_swarm.core.ownership import assign_bins, bin_owners
+from phd_swarm.core.partition import cells, neighbours, partition
+from phd_swarm.core.polygons import points_in_polygon, polygon_area, polygon_centroid
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)
 GRID = Grid(ENV, 1.0)

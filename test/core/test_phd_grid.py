@@ -19,6 +19,7 @@ from phd_swarm.core.models import (
     dames_moving,
     dames_static,
 )
+from phd_swarm.core.polygons import positions_in_sorted
 from phd_swarm.core.scan import Scan
 
 GRID = Grid(Environment(0.0, 0.0, 20.0, 16.0), 0.5)  # nx = 40, ny = 32
@@ -34,6 +35,18 @@ def _random_weights(seed: int) -> np.ndarray:
 def _scan(sensor, z, robot_id=0) -> Scan:
     return Scan(robot_id=robot_id, step=0, sensor=np.asarray(sensor, float),
                 z=np.asarray(z, float).reshape(-1, 2))
+
+
+def _update(w: np.ndarray, scan: Scan, grid: Grid = GRID, models=MODELS) -> np.ndarray:
+    """One scan on a whole-map image, as the central filter does.
+
+    The field of view's bins go through :func:`phd_grid.update_bins`; the others stay.
+    """
+    out = w.copy()
+    fov = grid.disk_bins(scan.sensor, models.detection.radius)
+    if fov.size:
+        out[fov] = phd_grid.update_bins(grid, models, fov, w[fov], scan)
+    return out
 
 
 def _full_eta(w: np.ndarray, scan: Scan) -> tuple[np.ndarray, np.ndarray]:
@@ -55,7 +68,7 @@ def test_hand_computed_one_bin_one_measurement():
     psi = 0.8 * g
     eta = 3.66e-3 + psi * 0.2
     expected_centre = (1.0 - 0.8) * 0.2 + psi * 0.2 / eta
-    out = phd_grid.update_local(grid, models, np.arange(9), w, scan)
+    out = _update(w, scan, grid, models)
     assert out[4] == pytest.approx(expected_centre, rel=1e-14)
     np.testing.assert_array_equal(np.delete(out, 4), np.delete(w, 4))
     # By hand: g = e^-0.5 / (pi / 2) = 0.386132, psi = 0.308906, eta = 0.065441,
@@ -68,7 +81,7 @@ def test_hand_computed_one_bin_one_measurement():
 def test_empty_scan_scales_fov_by_missed_detection(seed, sx, sy):
     w = _random_weights(seed)
     scan = _scan([sx, sy], np.empty((0, 2)))
-    out = phd_grid.update_local(GRID, MODELS, ALL, w, scan)
+    out = _update(w, scan)
     fov = GRID.disk_bins(scan.sensor, MODELS.detection.radius)
     rest = np.setdiff1d(ALL, fov)
     np.testing.assert_array_equal(out[fov], (1.0 - 0.8) * w[fov])
@@ -85,7 +98,7 @@ def test_update_mass_accounting(seed, m):
     sensor = rng.uniform([0.0, 0.0], [20.0, 16.0])
     z = sensor + rng.uniform(-3.5, 3.5, (m, 2))
     scan = _scan(sensor, z)
-    out = phd_grid.update_local(GRID, MODELS, ALL, w, scan)
+    out = _update(w, scan)
     pd = MODELS.detection.probability(GRID.centres, sensor)
     eta, clutter = _full_eta(w, scan)
     expected = np.sum((1.0 - pd) * w) + np.sum((eta - clutter) / eta)
@@ -104,12 +117,14 @@ def test_update_matches_dense_eq4():
     pd = MODELS.detection.probability(GRID.centres, scan.sensor)
     eta, _ = _full_eta(w, scan)
     dense = (1.0 - pd) * w + sum(ps[i] * w / eta[i] for i in range(3))
-    out = phd_grid.update_local(GRID, MODELS, ALL, w, scan)
+    out = _update(w, scan)
     np.testing.assert_allclose(out, dense, rtol=1e-13, atol=0.0)
-    # Any permutation of the held bins gives the same update, bin for bin.
-    perm = rng.permutation(GRID.size)
-    out_perm = phd_grid.update_local(GRID, MODELS, perm, w[perm], scan)
-    np.testing.assert_array_equal(out_perm, out[perm])
+    # Any order of the field of view's bins gives the same update, bin for bin, up to the
+    # order of eta's sum.
+    fov = GRID.disk_bins(scan.sensor, MODELS.detection.radius)
+    perm = rng.permutation(fov)
+    out_perm = phd_grid.update_bins(GRID, MODELS, perm, w[perm], scan)
+    np.testing.assert_allclose(out_perm, out[perm], rtol=1e-14, atol=0.0)
 
 
 def test_psi_shape_and_zero_outside_fov():
@@ -143,7 +158,7 @@ def test_eta_partials_over_a_partition_sum_to_eta(seed, parts):
     partials = []
     for r in range(parts):
         flat = np.nonzero(owner == r)[0]
-        pos = phd_grid.fov_positions(GRID, MODELS, flat, sensor)
+        pos = positions_in_sorted(flat, GRID.disk_bins(sensor, MODELS.detection.radius))
         ps = phd_grid.psi(MODELS, GRID.centres_of(flat[pos]), scan.z, sensor)
         partials.append(phd_grid.eta_partial(ps, w[flat[pos]]))
     clutter = MODELS.clutter.intensity(scan.z)
@@ -155,17 +170,6 @@ def test_eta_total_adds_in_the_given_order():
     parts = [np.array([1e16]), np.array([1.0]), np.array([-1e16])]
     assert phd_grid.eta_total(parts, np.array([0.5]))[0] == 0.5 + ((1e16 + 1.0) - 1e16)
     assert phd_grid.eta_total([], np.array([0.25, 0.5])).tolist() == [0.25, 0.5]
-
-
-def test_fov_positions_handles_unsorted_and_rejects_duplicates():
-    sensor = np.array([5.0, 5.0])
-    disk = GRID.disk_bins(sensor, 3.0)
-    flat = np.array([disk[3], 7, disk[0], GRID.size - 1, disk[-1]])
-    pos = phd_grid.fov_positions(GRID, MODELS, flat, sensor)
-    np.testing.assert_array_equal(flat[pos], [disk[0], disk[3], disk[-1]])
-    with pytest.raises(ValueError, match="duplicates"):
-        phd_grid.fov_positions(GRID, MODELS, np.array([disk[0], 3, disk[0]]), sensor)
-    assert phd_grid.fov_positions(GRID, MODELS, np.empty(0, int), sensor).size == 0
 
 
 def _disjoint_sensors(draw_seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -185,10 +189,8 @@ def test_updates_commute_when_fields_of_view_are_disjoint(seed):
     a, b = _disjoint_sensors(seed)
     sa = _scan(a, a + rng.uniform(-3.0, 3.0, (rng.integers(0, 4), 2)), robot_id=1)
     sb = _scan(b, b + rng.uniform(-3.0, 3.0, (rng.integers(0, 4), 2)), robot_id=2)
-    ab = phd_grid.update_local(GRID, MODELS, ALL, phd_grid.update_local(
-        GRID, MODELS, ALL, w, sa), sb)
-    ba = phd_grid.update_local(GRID, MODELS, ALL, phd_grid.update_local(
-        GRID, MODELS, ALL, w, sb), sa)
+    ab = _update(_update(w, sa), sb)
+    ba = _update(_update(w, sb), sa)
     assert ab.tobytes() == ba.tobytes()
 
 
@@ -198,10 +200,8 @@ def test_updates_do_not_commute_when_fields_of_view_overlap():
     w = np.full(GRID.size, 0.01)
     sa = _scan([8.0, 8.0], [[9.5, 8.0]], robot_id=1)
     sb = _scan([11.0, 8.0], [[9.6, 8.1], [12.0, 9.0]], robot_id=2)
-    ab = phd_grid.update_local(GRID, MODELS, ALL, phd_grid.update_local(
-        GRID, MODELS, ALL, w, sa), sb)
-    ba = phd_grid.update_local(GRID, MODELS, ALL, phd_grid.update_local(
-        GRID, MODELS, ALL, w, sb), sa)
+    ab = _update(_update(w, sa), sb)
+    ba = _update(_update(w, sb), sa)
     assert np.max(np.abs(ab - ba)) > 1e-6
 
 

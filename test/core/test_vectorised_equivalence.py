@@ -11,21 +11,20 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import models as core_models
-from phd_swarm.core import partition
-from phd_swarm.core.cumulative import cumulative_init, cumulative_update, cumulative_update_counts
+from phd_swarm.core import ownership
+from phd_swarm.core.cumulative import cumulative_update_counts
 from phd_swarm.core.exchange.voronoi_phd import context as context_mod
 from phd_swarm.core.exchange.voronoi_phd.participant import FilterContext
 from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.partition import (
-    assign_bins,
-    bins_owned_in_box,
-    cells,
+from phd_swarm.core.ownership import assign_bins, bins_owned_in_box
+from phd_swarm.core.partition import cells
+from phd_swarm.core.polygons import (
     points_in_any_polygon,
     points_in_polygon,
     points_in_polygons,
+    polygon_distances,
     stack_polygons,
 )
-from phd_swarm.core.polygons import polygon_distances
 
 
 def _random_cells(rng: np.random.Generator, env: Environment, count: int) -> list[np.ndarray]:
@@ -81,18 +80,21 @@ def test_stack_polygons_edges_are_rolled_vertices() -> None:
                                       np.roll(poly, -1, axis=0) - poly)
 
 
-def test_cumulative_update_counts_equals_one_update_per_scan() -> None:
+def test_cumulative_update_counts_at_once_equals_one_scan_at_a_time() -> None:
     rng = np.random.default_rng(5)
-    alpha, n = cumulative_init(50)
+    alpha, n = np.zeros(50), np.zeros(50, dtype=np.int64)
     observed = np.zeros(50, dtype=np.int64)
     rewarded = np.zeros(50, dtype=np.int64)
     for _ in range(30):
         fov = rng.choice(50, size=int(rng.integers(0, 20)), replace=False)
         hit = bool(rng.random() < 0.5)
-        alpha, n = cumulative_update(alpha, n, fov, hit)
+        one = np.zeros(50, dtype=np.int64)
+        one[fov] = 1
+        alpha, n = cumulative_update_counts(alpha, n, one, one * hit)
         observed[fov] += 1
         rewarded[fov] += hit
-    got_alpha, got_n = cumulative_update_counts(*cumulative_init(50), observed, rewarded)
+    got_alpha, got_n = cumulative_update_counts(np.zeros(50), np.zeros(50, dtype=np.int64),
+                                                observed, rewarded)
     np.testing.assert_array_equal(got_alpha, alpha)
     np.testing.assert_array_equal(got_n, n)
     assert got_n.dtype == np.int64
@@ -166,7 +168,7 @@ def test_polygon_distances_equal_pairwise_distances() -> None:
 def test_bins_owned_in_box_equals_assign_bins(monkeypatch: pytest.MonkeyPatch,
                                               direct_pairs: int) -> None:
     # 0 forces the tiled, pruned path on every box; 2**14 takes the direct one on small boxes.
-    monkeypatch.setattr(partition, "_DIRECT_PAIRS", direct_pairs)
+    monkeypatch.setattr(ownership, "_DIRECT_PAIRS", direct_pairs)
     rng = np.random.default_rng(17)
     for trial in range(120):
         res = (1.0, 0.5, 0.25, 0.1)[trial % 4]

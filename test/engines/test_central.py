@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import phd_grid
-from phd_swarm.core.partition import cells, points_in_polygon
+from phd_swarm.core.partition import cells
+from phd_swarm.core.polygons import points_in_polygon
 from phd_swarm.engines.central import CentralEngine
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc

@@ -77,3 +77,13 @@ def test_step_topics_follow_the_density_switches_and_steps_come_from_stamps():
     assert not any("/inbox/" in t or "markers" in t for t in step_topics(3))
     assert step_of(int(7 * 0.5e9), 0.5) == 7 and step_of(int(3 * 0.1e9) - 1, 0.1) == 3
     assert ranges([5, 1, 2, 3, 9, 10]) == "1-3, 5, 9-10" and ranges([]) == ""
+
+
+def test_reporters_is_one_rule_for_sets_and_arrays():
+    from phd_swarm.nodes.completeness import reporters
+
+    assert reporters(frozenset({0, 1, 2}), frozenset({0, 2, 3})) == {0, 2}
+    assert reporters(frozenset({0, 1}), None) == {0, 1}  # the last step
+    a = np.array([True, True, False])
+    b = np.array([True, False, True])
+    np.testing.assert_array_equal(reporters(a, b), [True, False, False])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
 
-from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.estimators.central_phd import CentralPhdFilter
 from phd_swarm.core.scan import Scan
 from phd_swarm.logs.mcap_log import LogWriter, open_log, read_messages
 from phd_swarm.nodes import convert

@@ -90,3 +90,17 @@ def test_a_missing_description_fails_the_render(monkeypatch):
     monkeypatch.delitem(gen_docs.SCENARIO_MEANINGS, "dt")
     with pytest.raises(ValueError, match="'dt'"):
         gen_docs.render_parameters()
+
+
+def test_a_plugin_loaded_in_this_process_stays_out_of_the_docs(tmp_path):
+    from phd_swarm.core import registry
+
+    plugin = tmp_path / "docs_probe_parts.py"
+    plugin.write_text("from phd_swarm.core import registry\n"
+                      "registry.register('controller', 'docs_probe', lambda s, r: None,\n"
+                      "                  description='not ours')\n")
+    registry.load_plugins([str(plugin)])
+    try:
+        assert "docs_probe" not in gen_docs.render_parameters()
+    finally:
+        registry._PARTS["controller"].pop("docs_probe")

@@ -84,6 +84,9 @@ class Knowledge:
     local : object
         What the estimator and exchange provide (e.g. :class:`CellDensity`); its type is
         given by the parts' capabilities (:mod:`phd_swarm.core.registry`).
+    estimator : object
+        The robot's estimator (:class:`~phd_swarm.core.estimators.base.Estimator`, or what
+        the part makes), for controllers that plan on the belief itself.
     """
 
     robot_id: int
@@ -91,6 +94,7 @@ class Knowledge:
     position: np.ndarray
     z: np.ndarray
     local: Any = None
+    estimator: Any = None
 
 
 class Controller(ABC):

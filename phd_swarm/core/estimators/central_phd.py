@@ -11,13 +11,15 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from . import phd_grid
-from .grid import Grid
-from .models import PhdModels
-from .scan import Scan
+from .. import phd_grid
+from ..extraction import ExtractionConfig, extract_targets
+from ..grid import Grid
+from ..models import PhdModels
+from ..scan import Scan
+from .base import Estimator
 
 
-class CentralPhdFilter:
+class CentralPhdFilter(Estimator):
     """Grid PHD filter over the whole environment (Dames 2020 eq. 3-6).
 
     The state is one mass per bin (expected number of targets in the bin), held as an image
@@ -34,11 +36,15 @@ class CentralPhdFilter:
         Bins of the environment.
     models : PhdModels
         Target and sensor models.
+    extraction : ExtractionConfig, optional
+        Threshold and window of :meth:`estimates` (default: Dames' values).
     """
 
-    def __init__(self, grid: Grid, models: PhdModels) -> None:
+    def __init__(self, grid: Grid, models: PhdModels,
+                 extraction: ExtractionConfig | None = None) -> None:
         self.grid = grid
         self.models = models
+        self.extraction = extraction
         self.kernel = models.motion.kernel(grid.resolution)
         self.ps_img = models.survival.probability(grid).reshape(grid.shape)
         self.birth_img = models.birth.mass(grid).reshape(grid.shape)
@@ -100,6 +106,14 @@ class CentralPhdFilter:
                 flat_w[bins] = phd_grid.update_bins(self.grid, self.models, bins,
                                                     flat_w[bins], scan)
         self._w = w
+
+    def estimates(self) -> np.ndarray:
+        """Target positions (N, 2) [m]: the peaks of the PHD image (Dames Sec. IV)."""
+        return extract_targets(self.grid, self._w, self.extraction)
+
+    def expected_count(self) -> float:
+        """Expected number of targets in E (:attr:`total_mass`)."""
+        return self.total_mass
 
     def step(self, scans: Iterable[Scan]) -> None:
         """One filter step: :meth:`predict`, then :meth:`update_all` with ``scans``."""

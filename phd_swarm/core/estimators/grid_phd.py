@@ -1,12 +1,13 @@
 """The grid ("bin") PHD estimator of Dames (2020) as a registered part: ``grid_phd``.
 
 The filter's equations live in :mod:`phd_swarm.core.phd_grid` (prediction eq. 3, update eq.
-4-6) and :class:`phd_swarm.core.central.CentralPhdFilter` (the whole map in one filter, the
-central engine's team filter). In the distributed system a robot's bins and their masses
-move from robot to robot with its cell, so they are held and updated by the ``voronoi_phd``
-exchange participant (:mod:`phd_swarm.core.exchange.voronoi_phd.participant`); what a
-robot reads from its own bins is :class:`GridPhdEstimator`: the estimates (extraction over
-the window around the cell, Dames Sec. IV) and the expected number of targets.
+4-6) and :class:`phd_swarm.core.estimators.central_phd.CentralPhdFilter` (the whole map in
+one filter, the central engine's team filter). In the distributed system a robot's bins and
+their masses move from robot to robot with its cell, so they are held and updated by the
+``voronoi_phd`` exchange participant
+(:mod:`phd_swarm.core.exchange.voronoi_phd.participant`); what a robot reads from its own
+bins is :class:`GridPhdEstimator`: the estimates (extraction over the window around the
+cell, Dames Sec. IV) and the expected number of targets.
 """
 
 from __future__ import annotations
@@ -17,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from .. import registry
-from ..central import CentralPhdFilter
 from ..extraction import ExtractionConfig, expected_cardinality, extract_targets
 from ..grid import Environment, Grid
+from .central_phd import CentralPhdFilter
 
 
 @dataclass(frozen=True)
@@ -69,11 +70,11 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> GridPhdEstimator:
 
 def central_filter(scenario: Any) -> CentralPhdFilter:
     """The team's filter over the whole map (the central engine's estimator)."""
-    return CentralPhdFilter(scenario.grid, scenario.models)
+    return CentralPhdFilter(scenario.grid, scenario.models, scenario.extraction)
 
 
 registry.register(
     "estimator", "grid_phd", lambda estimator, rid: estimator, setup=_setup,
     description="Grid PHD filter (Dames 2020 eq. 3-6), distributed over the robots' cells.",
     provides=("grid_density",), requires=("disk_fov", "position_measurement"),
-    central=central_filter)
+    central=central_filter, runs_in_exchange=True)

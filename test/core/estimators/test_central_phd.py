@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import phd_grid
-from phd_swarm.core.central import CentralPhdFilter
+from phd_swarm.core.estimators.central_phd import CentralPhdFilter
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import dames_moving, dames_static
 from phd_swarm.core.scan import Scan
@@ -86,15 +86,21 @@ def test_update_all_is_stable_for_equal_ids():
     assert a.weights.tobytes() == b.weights.tobytes()
 
 
-def test_update_equals_update_local_over_the_whole_map():
+def test_update_equals_the_dense_eq4_over_the_whole_map():
+    # Eq. 4-6 written out over every bin of the map (p_d and psi are 0 outside the field
+    # of view), one scan after the other in robot-id order.
     scans = _overlapping_scans(3)
     f = CentralPhdFilter(GRID, dames_static())
     f.weights = np.random.default_rng(3).uniform(0.0, 0.01, GRID.shape)
     w = f.weights.ravel().copy()
     f.update_all(scans)
-    for scan in scans:
-        w = phd_grid.update_local(GRID, f.models, np.arange(GRID.size), w, scan)
-    assert f.weights.ravel().tobytes() == w.tobytes()
+    m = f.models
+    for scan in sorted(scans, key=lambda s: s.robot_id):
+        ps = phd_grid.psi(m, GRID.centres, scan.z, scan.sensor)
+        pd = m.detection.probability(GRID.centres, scan.sensor)
+        eta = m.clutter.intensity(scan.z) + ps @ w
+        w = (1.0 - pd) * w + (ps / eta[:, None]).sum(axis=0) * w
+    np.testing.assert_allclose(f.weights.ravel(), w, rtol=1e-12, atol=0.0)
 
 
 def test_step_is_predict_then_updates():
@@ -157,3 +163,15 @@ def test_moving_models_track_a_walking_target():
         f.step([Scan(robot_id=0, step=step, sensor=sensor, z=z)])
     best = np.argmax(f.weights)
     assert np.linalg.norm(GRID.centres[best] - target) <= 1.5
+
+
+def test_the_central_filter_is_an_estimator_with_estimates_and_a_count():
+    from phd_swarm.core.estimators.base import Estimator
+    from phd_swarm.core.extraction import extract_targets
+
+    f = CentralPhdFilter(GRID, dames_static())
+    assert isinstance(f, Estimator)
+    for scan in _overlapping_scans(3):
+        f.update(scan)
+    np.testing.assert_array_equal(f.estimates(), extract_targets(GRID, f.weights))
+    assert f.expected_count() == f.total_mass

@@ -1,7 +1,7 @@
 """The cells of one step as one robot sees them (Dames 2020 Alg. 1 lines 2-3).
 
 :class:`LocalPartition` is the partition of the robot and the contacts whose states arrived
-(the own power/Voronoi cell and who owns a bin, :func:`~phd_swarm.core.partition.assign_bins`:
+(the own power/Voronoi cell and who owns a bin, :func:`~phd_swarm.core.ownership.assign_bins`:
 lowest power distance, lowest id on ties, so all robots agree without a global view).
 :class:`NeighbourCells` holds the cells the contacts sent, with their bounding boxes and
 radii, for the questions later phases ask of them (whose cell is within reach of phantom
@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...grid import Environment
-from ...partition import assign_bins, cell_of, points_in_any_polygon, points_in_polygon
-from ...polygons import bounding_boxes, cell_radii
+from ...ownership import assign_bins
+from ...partition import cell_of
+from ...polygons import bounding_boxes, cell_radii, points_in_any_polygon, points_in_polygon
 from .messages import CellMsg, StateMsg
 
 

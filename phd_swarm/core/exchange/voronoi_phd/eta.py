@@ -21,13 +21,14 @@ import numpy as np
 
 from ...phd_grid import eta_partial, eta_total, psi_pd, update_weights
 from ...polygons import positions_in_sorted
+from ...scan import Scan
 from ..base import Envelope
 from .cells import LocalPartition, NeighbourCells
 from .context import FilterContext
 from .errors import ProtocolError
 from .layers import BinLayer
 from .mailbox import Mailbox
-from .messages import EtaPartialMsg, EtaTotalMsg, ScanMsg
+from .messages import EtaPartialMsg, EtaTotalMsg
 
 _log = logging.getLogger("phd_swarm.protocol")
 
@@ -110,7 +111,7 @@ class EtaUpdate:
                 _log.warning("robot %d: %d field-of-view bins lie in no known cell at step %d",
                              self.robot_id, uncovered, self.step)
         out = [Envelope(self.robot_id, int(dst),
-                        ScanMsg(self.robot_id, self.step, self.sensor, self.z))
+                        Scan(self.robot_id, self.step, self.sensor, self.z))
                for dst in sorted(self.scan_peers - {self.robot_id})]
         meet = grid.disks_meet(bins, view.positions, radius)
         pending = set(view.ids[alive(view.ids) & meet].tolist())

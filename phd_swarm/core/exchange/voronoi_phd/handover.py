@@ -27,7 +27,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ...grid import Grid
-from ...partition import bins_owned_in_box
+from ...ownership import bins_owned_in_box
 from ...polygons import isin_sorted
 from ..base import Envelope
 from .cells import LocalPartition

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from ...scan import Scan
 from ..base import Envelope
 from .messages import (
     CellMsg,
     EtaPartialMsg,
     EtaTotalMsg,
     Message,
-    ScanMsg,
     StateMsg,
     TransferKind,
     TransferMsg,
@@ -124,7 +124,7 @@ def mail_route(msg: Message) -> tuple[int, Key]:
 _ROUTES = {
     StateMsg: lambda m: (m.robot_id, (m.step, "state")),
     CellMsg: lambda m: (m.robot_id, (m.step, "cell")),
-    ScanMsg: lambda m: (m.robot_id, (m.step, "scan")),
+    Scan: lambda m: (m.robot_id, (m.step, "scan")),
     TransferMsg: lambda m: (m.from_id, (m.step, "own" if m.kind == TransferKind.OWNERSHIP
                                         else "phantom")),
     EtaPartialMsg: lambda m: (m.sender_id, (m.step, "partial", m.active_id)),
@@ -148,7 +148,7 @@ def may_miss(msg: Message, held: set[str]) -> bool:
     if kind is TransferMsg:
         later = _AFTER_OWN if msg.kind == TransferKind.OWNERSHIP else _UPDATE
         return not held & later
-    if kind is ScanMsg:
+    if kind is Scan:
         return "partial" not in held
     if kind is EtaPartialMsg:
         return "total" not in held

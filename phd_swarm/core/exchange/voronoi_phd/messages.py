@@ -13,8 +13,9 @@ from enum import IntEnum
 
 import numpy as np
 
-_HEADER = 4 + 8 + 4 + 4  # encapsulation, stamp, frame_id length + "map\0"
-_POINT = 24
+from ...scan import CDR_HEADER as _HEADER
+from ...scan import CDR_POINT as _POINT
+from ...scan import Scan
 
 
 class TransferKind(IntEnum):
@@ -67,20 +68,6 @@ class CellMsg:
         n = len(self.contact_ids)
         return (_HEADER + 4 + 4 + _POINT + 8 + 4 + _POINT * len(self.vertices)
                 + 4 + 4 * len(self.neighbour_ids) + 16 + n * (4 + _POINT + 16))
-
-
-@dataclass(frozen=True, eq=False)
-class ScanMsg:
-    """``MeasurementSet``: Dames Alg. 2 line 6 (Z, q and r)."""
-
-    robot_id: int
-    step: int
-    sensor: np.ndarray
-    z: np.ndarray
-
-    def wire_size(self) -> int:
-        """Estimated CDR payload size [bytes]."""
-        return _HEADER + 4 + 4 + _POINT + 4 + _POINT * len(self.z)
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +127,8 @@ class TransferMsg:
                 + 12 * len(self.radius_ids))
 
 
-Message = StateMsg | CellMsg | ScanMsg | EtaPartialMsg | EtaTotalMsg | TransferMsg
+#: The protocol's messages; a measurement set travels as the core :class:`Scan` itself.
+Message = StateMsg | CellMsg | Scan | EtaPartialMsg | EtaTotalMsg | TransferMsg
 
 
 def sender_of(msg: Message) -> int:

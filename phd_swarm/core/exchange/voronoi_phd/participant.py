@@ -20,7 +20,7 @@ robots. One step ``t`` runs these phases:
 
 Per-bin state besides the PHD mass (Chen's cumulative alpha and n) is a layer that travels
 with the bins (:mod:`.layers`). Ownership of a bin is the canonical rule of
-:func:`phd_swarm.core.partition.assign_bins` (lowest power distance, lowest id on ties) over
+:func:`phd_swarm.core.ownership.assign_bins` (lowest power distance, lowest id on ties) over
 the robot and its contacts, so all robots agree on it without a global view. Every sum that
 combines several robots' numbers is taken in robot-id order, so the result does not depend
 on the order messages arrive in.

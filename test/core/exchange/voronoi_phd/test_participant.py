@@ -10,7 +10,6 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
     CellMsg,
     EtaPartialMsg,
     EtaTotalMsg,
-    ScanMsg,
     StateMsg,
     TransferKind,
     TransferMsg,
@@ -24,6 +23,7 @@ from phd_swarm.core.exchange.voronoi_phd.participant import (
 )
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
+from phd_swarm.core.scan import Scan
 
 CTX = FilterContext(Grid(Environment(0.0, 0.0, 20.0, 20.0), 1.0), PhdModels())
 POS = np.array([[5.0, 5.0], [15.0, 5.0], [10.0, 15.0]])
@@ -75,7 +75,7 @@ def test_mailbox_routes_name_the_sender_as_sender_of_does():
     messages = {
         (1, "state"): StateMsg(4, 1, np.zeros(2), 0.0),
         (1, "cell"): CellMsg(4, 1, np.zeros(2), 0.0, np.empty((0, 2)), ()),
-        (1, "scan"): ScanMsg(4, 1, np.zeros(2), np.empty((0, 2))),
+        (1, "scan"): Scan(4, 1, np.zeros(2), np.empty((0, 2))),
         (1, "partial", 9): EtaPartialMsg(4, 9, 1, empty),
         (1, "total", 4): EtaTotalMsg(4, 1, empty),
         (1, "own"): TransferMsg(4, 9, 1, TransferKind.OWNERSHIP, empty, empty),
@@ -171,7 +171,7 @@ def test_a_keep_alive_gets_the_messages_of_that_step_again_even_after_the_step()
     robots = _team()
     sent = _run_step(robots, 0, Z)
     to_1 = [e for e in sent if e.src == 0 and e.dst == 1 and not isinstance(e.msg, StateMsg)]
-    assert [type(e.msg) for e in to_1] == [CellMsg, TransferMsg, ScanMsg, EtaTotalMsg,
+    assert [type(e.msg) for e in to_1] == [CellMsg, TransferMsg, Scan, EtaTotalMsg,
                                            EtaPartialMsg]
     robot = robots[0]
     assert robot.phase is Phase.DONE
