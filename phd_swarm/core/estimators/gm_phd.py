@@ -1,0 +1,466 @@
+"""Gaussian-mixture PHD filter (Vo & Ma 2006), linear-Gaussian models, vectorised.
+
+The intensity (PHD) of the targets is a weighted sum of Gaussians
+``v(x) = sum_j w_j N(x; m_j, P_j)``; under linear-Gaussian motion and measurement models
+the PHD recursion keeps that form (Vo & Ma 2006, Propositions 1-2). This module holds:
+
+- :class:`GmPhdModel`: the models and the reduction settings (frozen, validated);
+- :class:`GaussianMixture`: the intensity as plain arrays;
+- :func:`predict` (Table I steps 1-2), :func:`update` (Table I steps 3-4, with a detection
+  probability per component), :func:`prune_and_merge` (Table II), :func:`extract`
+  (Table III);
+- :class:`GmPhdEstimator`: the estimator role (:class:`.base.Estimator`) over them.
+
+Left out of Table I: target spawning (the spawn intensity of assumption A.3 and the
+spawn terms of steps 1-2 and Proposition 1); births are the only new components. The
+detection probability is given per component (the caller evaluates it at the mean, or
+averages it over the component), which is exact when p_D is constant over each
+component's support and an approximation otherwise; the paper's Gaussian-mixture p_D
+extension is not implemented.
+
+Reference: B.-N. Vo and W.-K. Ma, "The Gaussian mixture probability hypothesis density
+filter", IEEE Trans. Signal Processing 54(11), 2006.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import logsumexp
+
+from ..scan import Scan
+from .base import Estimator
+
+#: p_D evaluator: (means (J, d), covs (J, d, d), sensor position (2,) [m]) -> p_D (J,).
+DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+def _finite(name: str, a: np.ndarray) -> None:
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite (no NaN or inf)")
+
+
+def _spd(name: str, a: np.ndarray) -> None:
+    """Raise unless every matrix of the stack ``a`` (..., n, n) is symmetric positive definite."""
+    _finite(name, a)
+    if not np.allclose(a, np.swapaxes(a, -1, -2), rtol=1e-9, atol=1e-12):
+        raise ValueError(f"{name} must be symmetric")
+    try:
+        np.linalg.cholesky(a)
+    except np.linalg.LinAlgError:
+        raise ValueError(f"{name} must be positive definite") from None
+
+
+def _probability(name: str, p: np.ndarray) -> None:
+    _finite(name, p)
+    if np.any((p < 0.0) | (p > 1.0)):
+        raise ValueError(f"{name} must lie in [0, 1]")
+
+
+@dataclass(frozen=True, eq=False)
+class GaussianMixture:
+    """A Gaussian-mixture intensity ``sum_j w_j N(x; m_j, P_j)``.
+
+    Attributes
+    ----------
+    weights : np.ndarray, shape (J,)
+        Component weights (expected number of targets each carries) [-].
+    means : np.ndarray, shape (J, d)
+        Component means, in the units of the state.
+    covs : np.ndarray, shape (J, d, d)
+        Component covariances.
+    """
+
+    weights: np.ndarray
+    means: np.ndarray
+    covs: np.ndarray
+
+    def __post_init__(self) -> None:
+        w = np.asarray(self.weights, dtype=float).reshape(-1)
+        m = np.asarray(self.means, dtype=float)
+        p = np.asarray(self.covs, dtype=float)
+        j = w.shape[0]
+        if m.ndim != 2 or m.shape[0] != j:
+            raise ValueError(f"means must have shape ({j}, d), got {m.shape}")
+        d = m.shape[1]
+        if p.shape != (j, d, d):
+            raise ValueError(f"covs must have shape ({j}, {d}, {d}), got {p.shape}")
+        object.__setattr__(self, "weights", w)
+        object.__setattr__(self, "means", m)
+        object.__setattr__(self, "covs", p)
+
+    @classmethod
+    def empty(cls, dim: int) -> GaussianMixture:
+        """The zero intensity over a ``dim``-dimensional state."""
+        return cls(np.empty(0), np.empty((0, dim)), np.empty((0, dim, dim)))
+
+    def __len__(self) -> int:
+        return self.weights.shape[0]
+
+    @property
+    def dim(self) -> int:
+        """State dimension d."""
+        return self.means.shape[1]
+
+
+@dataclass(frozen=True, eq=False)
+class GmPhdModel:
+    """Linear-Gaussian model and reduction settings of the GM-PHD filter (Vo & Ma A.1-A.3).
+
+    Attributes
+    ----------
+    F : np.ndarray, shape (d, d)
+        State transition matrix (A.1).
+    Q : np.ndarray, shape (d, d)
+        Process noise covariance (A.1), symmetric positive definite.
+    H : np.ndarray, shape (m, d)
+        Observation matrix (A.1).
+    R : np.ndarray, shape (m, m)
+        Measurement noise covariance (A.1) [m^2 for position measurements], SPD.
+    p_s : float
+        Survival probability over one step (A.2) [-], in [0, 1].
+    birth_weights : np.ndarray, shape (B,)
+        Birth intensity weights (A.3) [expected births per step each], >= 0.
+    birth_means : np.ndarray, shape (B, d)
+        Birth intensity means.
+    birth_covs : np.ndarray, shape (B, d, d)
+        Birth intensity covariances, SPD.
+    clutter_intensity : float
+        kappa, the clutter intensity in measurement space [1/m^2 for 2-D positions],
+        constant over the space, >= 0.
+    prune_threshold : float
+        T of Table II: components with weight <= T are dropped [-].
+    merge_threshold : float
+        U of Table II: Mahalanobis (squared) distance within which components merge [-].
+    max_components : int
+        J_max of Table II.
+    extraction_threshold : float
+        Weight above which a component yields estimates (Table III) [-].
+    """
+
+    F: np.ndarray
+    Q: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+    p_s: float
+    birth_weights: np.ndarray
+    birth_means: np.ndarray
+    birth_covs: np.ndarray
+    clutter_intensity: float
+    prune_threshold: float = 1e-5
+    merge_threshold: float = 4.0
+    max_components: int = 100
+    extraction_threshold: float = 0.5
+
+    def __post_init__(self) -> None:
+        arrays = {}
+        for name in ("F", "Q", "H", "R", "birth_weights", "birth_means", "birth_covs"):
+            a = np.array(getattr(self, name), dtype=float)
+            a.flags.writeable = False
+            arrays[name] = a
+            object.__setattr__(self, name, a)
+        f, q, h, r = arrays["F"], arrays["Q"], arrays["H"], arrays["R"]
+        if f.ndim != 2 or f.shape[0] != f.shape[1]:
+            raise ValueError(f"F must be square (d, d), got {f.shape}")
+        d = f.shape[0]
+        if q.shape != (d, d):
+            raise ValueError(f"Q must have shape ({d}, {d}), got {q.shape}")
+        if h.ndim != 2 or h.shape[1] != d:
+            raise ValueError(f"H must have shape (m, {d}), got {h.shape}")
+        m = h.shape[0]
+        if r.shape != (m, m):
+            raise ValueError(f"R must have shape ({m}, {m}), got {r.shape}")
+        bw, bm, bc = arrays["birth_weights"], arrays["birth_means"], arrays["birth_covs"]
+        if bw.ndim != 1:
+            raise ValueError(f"birth_weights must have shape (B,), got {bw.shape}")
+        b = bw.shape[0]
+        if bm.shape != (b, d):
+            raise ValueError(f"birth_means must have shape ({b}, {d}), got {bm.shape}")
+        if bc.shape != (b, d, d):
+            raise ValueError(f"birth_covs must have shape ({b}, {d}, {d}), got {bc.shape}")
+        _finite("F", f)
+        _finite("H", h)
+        _spd("Q", q)
+        _spd("R", r)
+        _finite("birth_weights", bw)
+        if np.any(bw < 0.0):
+            raise ValueError("birth_weights must be >= 0")
+        _finite("birth_means", bm)
+        _spd("birth_covs", bc)
+        _probability("p_s", np.asarray(self.p_s, dtype=float))
+        for name in ("clutter_intensity", "prune_threshold", "merge_threshold",
+                     "extraction_threshold"):
+            v = float(getattr(self, name))
+            if not np.isfinite(v) or v < 0.0:
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+            object.__setattr__(self, name, v)
+        object.__setattr__(self, "p_s", float(self.p_s))
+        if int(self.max_components) != self.max_components or self.max_components < 1:
+            raise ValueError(f"max_components must be an integer >= 1, got "
+                             f"{self.max_components!r}")
+        object.__setattr__(self, "max_components", int(self.max_components))
+
+    @property
+    def dim(self) -> int:
+        """State dimension d."""
+        return self.F.shape[0]
+
+    @property
+    def measurement_dim(self) -> int:
+        """Measurement dimension m."""
+        return self.H.shape[0]
+
+
+def _check_mixture(mix: GaussianMixture, model: GmPhdModel) -> None:
+    if mix.dim != model.dim:
+        raise ValueError(f"mixture state dimension {mix.dim} != model dimension {model.dim}")
+
+
+def predict(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
+    """Predicted intensity v_{k|k-1}: births plus surviving components (Table I steps 1-2).
+
+    Surviving component j: ``w = p_S w_j``, ``m = F m_j``, ``P = Q + F P_j F^T``
+    (Proposition 1); the births (A.3) come first, as in Table I. Spawning is not modelled.
+
+    Parameters
+    ----------
+    mix : GaussianMixture
+        Posterior intensity v_{k-1}, J components of dimension d.
+    model : GmPhdModel
+        Motion model (F, Q, p_S) and birth intensity (B components).
+
+    Returns
+    -------
+    GaussianMixture
+        B + J components: the births, then the survivors in the order of ``mix``.
+    """
+    _check_mixture(mix, model)
+    f = model.F
+    means = mix.means @ f.T
+    covs = f @ mix.covs @ f.T + model.Q
+    return GaussianMixture(
+        np.concatenate([model.birth_weights, model.p_s * mix.weights]),
+        np.concatenate([model.birth_means, means]),
+        np.concatenate([model.birth_covs, covs]))
+
+
+def update(mix: GaussianMixture, z: np.ndarray, model: GmPhdModel,
+           p_d: np.ndarray) -> GaussianMixture:
+    """Posterior intensity v_k given the measurement set Z_k (Table I steps 3-4, Proposition 2).
+
+    For component j (predicted weight w_j, mean m_j, covariance P_j) and measurement z:
+    ``eta_j = H m_j``, ``S_j = R + H P_j H^T``, ``K_j = P_j H^T S_j^-1`` (step 3);
+    missed detection ``(1 - p_D,j) w_j`` with (m_j, P_j) unchanged; detection by z
+    ``w_j(z) = p_D,j w_j q_j(z) / (kappa + sum_l p_D,l w_l q_l(z))`` with
+    ``q_j(z) = N(z; eta_j, S_j)``, mean ``m_j + K_j (z - eta_j)`` and the updated covariance
+    (step 4). With an empty scan only the missed-detection terms remain.
+
+    Parameters
+    ----------
+    mix : GaussianMixture
+        Predicted intensity v_{k|k-1}, J components of dimension d.
+    z : np.ndarray, shape (M, m)
+        Measurements, in the units of the measurement space (M may be 0).
+    model : GmPhdModel
+        Measurement model (H, R) and clutter intensity kappa [1/m^2 for 2-D positions].
+    p_d : np.ndarray, shape (J,)
+        Detection probability of each component [-], in [0, 1].
+
+    Returns
+    -------
+    GaussianMixture
+        J (1 + M) components: the J missed-detection terms, then J per measurement, in
+        measurement order.
+    """
+    _check_mixture(mix, model)
+    nz = model.measurement_dim
+    z = np.asarray(z, dtype=float)
+    if z.size == 0:
+        z = z.reshape(0, nz)
+    if z.ndim != 2 or z.shape[1] != nz:
+        raise ValueError(f"measurements z must have shape (M, {nz}), got {z.shape}")
+    _finite("measurements z", z)
+    p_d = np.asarray(p_d, dtype=float)
+    if p_d.shape != mix.weights.shape:
+        raise ValueError(f"p_d must have shape {mix.weights.shape}, got {p_d.shape}")
+    _probability("p_d", p_d)
+
+    missed = GaussianMixture((1.0 - p_d) * mix.weights, mix.means.copy(), mix.covs.copy())
+    n_comp, n_meas = len(mix), z.shape[0]
+    if n_meas == 0 or n_comp == 0:
+        return missed
+
+    h, r = model.H, model.R
+    eta = mix.means @ h.T                                   # (J, m)
+    pht = mix.covs @ h.T                                    # (J, d, m)
+    s = h @ pht + r                                         # (J, m, m)
+    s = 0.5 * (s + np.swapaxes(s, -1, -2))
+    chol = np.linalg.cholesky(s)
+    s_inv = np.linalg.inv(s)
+    gain = pht @ s_inv                                      # (J, d, m)
+    # Joseph form (I - K H) P (I - K H)^T + K R K^T: it stays symmetric positive
+    # semi-definite under rounding for any gain, where (I - K H) P loses symmetry and can
+    # go indefinite when R is small against P. It is computed once per component (all
+    # measurements share it), so its extra products cost nothing per measurement.
+    # The sum is symmetrised too, so that the result is symmetric bit for bit.
+    ikh = np.eye(model.dim) - gain @ h                      # (J, d, d)
+    covs_upd = (ikh @ mix.covs @ np.swapaxes(ikh, -1, -2)
+                + gain @ r @ np.swapaxes(gain, -1, -2))
+    covs_upd = 0.5 * (covs_upd + np.swapaxes(covs_upd, -1, -2))
+
+    nu = z[:, None, :] - eta[None, :, :]                    # (M, J, m)
+    maha = np.einsum("mji,jik,mjk->mj", nu, s_inv, nu)
+    log_det = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(axis=-1)  # (J,)
+    log_q = -0.5 * (maha + log_det + nz * np.log(2.0 * np.pi))             # (M, J)
+    # In log space: with kappa = 0 a measurement far from every component still divides
+    # by the largest term instead of giving 0/0.
+    with np.errstate(divide="ignore"):
+        log_num = np.log(p_d * mix.weights)[None, :] + log_q                # (M, J)
+        log_kappa = np.log(model.clutter_intensity)
+    log_den = logsumexp(np.concatenate([np.full((n_meas, 1), log_kappa), log_num], axis=1),
+                        axis=1)
+    with np.errstate(invalid="ignore"):
+        w_det = np.exp(log_num - log_den[:, None])
+    w_det[~np.isfinite(log_den)] = 0.0
+
+    means_det = mix.means[None, :, :] + np.einsum("jdk,mjk->mjd", gain, nu)  # (M, J, d)
+    d = model.dim
+    return GaussianMixture(
+        np.concatenate([missed.weights, w_det.reshape(-1)]),
+        np.concatenate([missed.means, means_det.reshape(-1, d)]),
+        np.concatenate([missed.covs, np.tile(covs_upd, (n_meas, 1, 1))]))
+
+
+def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
+    """Pruning, merging and capping of the mixture (Vo & Ma Table II).
+
+    Components with weight <= T are dropped (their mass is not redistributed, as in the
+    paper). Then, repeatedly, the heaviest remaining component j and every remaining i with
+    ``(m_i - m_j)^T P_i^-1 (m_i - m_j) <= U`` merge into one with the summed weight, the
+    weighted mean and the moment-matched covariance
+    ``sum_i w_i (P_i + (m - m_i)(m - m_i)^T) / w``. If more than J_max components remain,
+    the J_max heaviest are kept.
+
+    Parameters
+    ----------
+    mix : GaussianMixture
+        J components of dimension d.
+    model : GmPhdModel
+        T (``prune_threshold``), U (``merge_threshold``), J_max (``max_components``).
+
+    Returns
+    -------
+    GaussianMixture
+        At most J_max components, heaviest first.
+    """
+    _check_mixture(mix, model)
+    keep = mix.weights > model.prune_threshold
+    w, m, p = mix.weights[keep], mix.means[keep], mix.covs[keep]
+    if w.size == 0:
+        return GaussianMixture.empty(model.dim)
+    p_inv = np.linalg.inv(p)
+    remaining = np.ones(w.size, dtype=bool)
+    out_w, out_m, out_p = [], [], []
+    while remaining.any():
+        idx = np.flatnonzero(remaining)
+        j = idx[np.argmax(w[idx])]
+        diff = m[idx] - m[j]
+        dist = np.einsum("ni,nik,nk->n", diff, p_inv[idx], diff)
+        group = idx[dist <= model.merge_threshold]
+        wg = w[group]
+        w_sum = wg.sum()
+        mean = wg @ m[group] / w_sum
+        dm = mean - m[group]
+        cov = np.einsum("n,nik->ik", wg, p[group] + dm[:, :, None] * dm[:, None, :]) / w_sum
+        out_w.append(w_sum)
+        out_m.append(mean)
+        out_p.append(0.5 * (cov + cov.T))
+        remaining[group] = False
+    weights = np.asarray(out_w)
+    order = np.argsort(-weights, kind="stable")[:model.max_components]
+    return GaussianMixture(weights[order], np.asarray(out_m)[order], np.asarray(out_p)[order])
+
+
+def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:
+    """Multi-target state estimate (Vo & Ma Table III).
+
+    Each component with weight above the extraction threshold (0.5 in the paper) yields
+    ``round(w)`` copies of its mean; rounding is half up (``floor(w + 1/2)``).
+
+    Parameters
+    ----------
+    mix : GaussianMixture
+        J components of dimension d.
+    model : GmPhdModel
+        ``extraction_threshold``.
+
+    Returns
+    -------
+    np.ndarray, shape (N, d)
+        Estimated states, in the order of the components.
+    """
+    _check_mixture(mix, model)
+    sel = mix.weights > model.extraction_threshold
+    copies = np.floor(mix.weights[sel] + 0.5).astype(int)
+    return np.repeat(mix.means[sel], copies, axis=0)
+
+
+def constant_p_d(p: float) -> DetectionProbability:
+    """A detection probability ``p`` for every component, wherever the sensor is."""
+    _probability("p_d", np.asarray(p, dtype=float))
+    p = float(p)
+
+    def p_d(means: np.ndarray, covs: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        return np.full(means.shape[0], p)
+
+    return p_d
+
+
+class GmPhdEstimator(Estimator):
+    """GM-PHD filter as an estimator: Table I prediction and update, Table II after each update.
+
+    The state's first two coordinates are the target position [m] (world frame) and the
+    measurement space is 2-D (a scan's z), so the model needs d >= 2 and H with 2 rows.
+
+    Parameters
+    ----------
+    model : GmPhdModel
+        Models and reduction settings.
+    mixture : GaussianMixture, optional
+        Initial intensity; empty by default.
+    p_d : callable, optional
+        ``p_d(means (J, d), covs (J, d, d), sensor (2,) [m]) -> (J,)``, the detection
+        probability of each component for a scan taken at ``sensor``; 0.9 everywhere by
+        default.
+    """
+
+    def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
+                 p_d: DetectionProbability | None = None) -> None:
+        if model.dim < 2 or model.measurement_dim != 2:
+            raise ValueError(f"GmPhdEstimator needs a state of dimension >= 2 and 2-D "
+                             f"measurements, got d={model.dim}, m={model.measurement_dim}")
+        self.model = model
+        self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
+        _check_mixture(self.mixture, model)
+        self._p_d = constant_p_d(0.9) if p_d is None else p_d
+
+    def predict(self) -> None:
+        """Births and survivors over one step (Table I steps 1-2)."""
+        self.mixture = predict(self.mixture, self.model)
+
+    def update(self, scan: Scan) -> None:
+        """Update with ``scan`` (Table I steps 3-4), then prune and merge (Table II)."""
+        p_d = np.asarray(self._p_d(self.mixture.means, self.mixture.covs, scan.sensor),
+                         dtype=float)
+        self.mixture = prune_and_merge(update(self.mixture, scan.z, self.model, p_d),
+                                       self.model)
+
+    def estimates(self) -> np.ndarray:
+        """Estimated target positions (N, 2) [m]: the first two coordinates (Table III)."""
+        return extract(self.mixture, self.model)[:, :2]
+
+    def expected_count(self) -> float:
+        """Expected number of targets, the sum of the weights."""
+        return float(self.mixture.weights.sum())
