@@ -275,42 +275,138 @@ def update(mix: GaussianMixture, z: np.ndarray, model: GmPhdModel,
         measurement order.
     """
     _check_mixture(mix, model)
-    nz = model.measurement_dim
+    z = check_measurements(z, model.measurement_dim)
+    p_d = check_p_d(p_d, len(mix))
+    if len(mix) == 0 or z.shape[0] == 0:
+        return GaussianMixture((1.0 - p_d) * mix.weights, mix.means.copy(), mix.covs.copy())
+    terms = linear_terms(mix, model.H, model.R)
+    return update_with_terms(mix, z, terms, p_d, model.clutter_intensity).mixture
+
+
+def check_measurements(z: np.ndarray, measurement_dim: int) -> np.ndarray:
+    """``z`` as a float array (M, m), refused with a clear error if malformed or not finite."""
     z = np.asarray(z, dtype=float)
     if z.size == 0:
-        z = z.reshape(0, nz)
-    if z.ndim != 2 or z.shape[1] != nz:
-        raise ValueError(f"measurements z must have shape (M, {nz}), got {z.shape}")
-    _finite("measurements z", z)
+        z = z.reshape(0, measurement_dim)
+    if z.ndim != 2 or z.shape[1] != measurement_dim:
+        raise ValueError(f"measurements z must have shape (M, {measurement_dim}), "
+                         f"got {z.shape}")
+    bad = ~np.all(np.isfinite(z), axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"measurements z must be finite: row {i} is {z[i].tolist()}")
+    return z
+
+
+def check_p_d(p_d: np.ndarray, n: int) -> np.ndarray:
+    """``p_d`` as a float array (n,) in [0, 1], refused with a clear error otherwise."""
     p_d = np.asarray(p_d, dtype=float)
-    if p_d.shape != mix.weights.shape:
-        raise ValueError(f"p_d must have shape {mix.weights.shape}, got {p_d.shape}")
+    if p_d.shape != (n,):
+        raise ValueError(f"p_d must have shape ({n},), got {p_d.shape}")
     _probability("p_d", p_d)
+    return p_d
 
-    missed = GaussianMixture((1.0 - p_d) * mix.weights, mix.means.copy(), mix.covs.copy())
-    n_comp, n_meas = len(mix), z.shape[0]
-    if n_meas == 0 or n_comp == 0:
-        return missed
 
-    h, r = model.H, model.R
+@dataclass(frozen=True, eq=False)
+class KalmanTerms:
+    """What the update of each component needs, whatever linearised the measurement model.
+
+    Attributes
+    ----------
+    eta : np.ndarray, shape (J, m)
+        Predicted measurement of each component.
+    s : np.ndarray, shape (J, m, m)
+        Innovation covariance of each component, symmetric positive definite.
+    gain : np.ndarray, shape (J, d, m)
+        Kalman gain of each component (the cross-covariance times S^-1).
+    covs : np.ndarray, shape (J, d, d)
+        Updated covariance of each component (one for all measurements).
+    innovation : callable, optional
+        ``innovation(z (M, m), eta (J, m)) -> (M, J, m)``; plain ``z - eta`` by default, a
+        wrapped difference for angles.
+    """
+
+    eta: np.ndarray
+    s: np.ndarray
+    gain: np.ndarray
+    covs: np.ndarray
+    innovation: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+
+
+def linear_terms(mix: GaussianMixture, h: np.ndarray, r: np.ndarray) -> KalmanTerms:
+    """Kalman terms of the linear-Gaussian measurement model z = H x + v, v ~ N(0, R) (step 3)."""
     eta = mix.means @ h.T                                   # (J, m)
     pht = mix.covs @ h.T                                    # (J, d, m)
     s = h @ pht + r                                         # (J, m, m)
     s = 0.5 * (s + np.swapaxes(s, -1, -2))
-    chol = np.linalg.cholesky(s)
-    s_inv = np.linalg.inv(s)
-    gain = pht @ s_inv                                      # (J, d, m)
+    gain = pht @ np.linalg.inv(s)                           # (J, d, m)
     # Joseph form (I - K H) P (I - K H)^T + K R K^T: it stays symmetric positive
     # semi-definite under rounding for any gain, where (I - K H) P loses symmetry and can
     # go indefinite when R is small against P. It is computed once per component (all
     # measurements share it), so its extra products cost nothing per measurement.
     # The sum is symmetrised too, so that the result is symmetric bit for bit.
-    ikh = np.eye(model.dim) - gain @ h                      # (J, d, d)
-    covs_upd = (ikh @ mix.covs @ np.swapaxes(ikh, -1, -2)
-                + gain @ r @ np.swapaxes(gain, -1, -2))
-    covs_upd = 0.5 * (covs_upd + np.swapaxes(covs_upd, -1, -2))
+    ikh = np.eye(mix.dim) - gain @ h                        # (J, d, d)
+    covs = (ikh @ mix.covs @ np.swapaxes(ikh, -1, -2)
+            + gain @ r @ np.swapaxes(gain, -1, -2))
+    return KalmanTerms(eta, s, gain, 0.5 * (covs + np.swapaxes(covs, -1, -2)))
 
-    nu = z[:, None, :] - eta[None, :, :]                    # (M, J, m)
+
+@dataclass(frozen=True, eq=False)
+class UpdateResult:
+    """The posterior mixture and, per measurement, how its mass was shared.
+
+    Attributes
+    ----------
+    mixture : GaussianMixture
+        J (1 + M) components: the J missed-detection terms, then J per measurement.
+    detection_weights : np.ndarray, shape (M, J)
+        w_j(z), the weight measurement z gave component j [-]; row sums are <= 1, the
+        rest of each row being the clutter's share kappa(z) / L(z).
+    """
+
+    mixture: GaussianMixture
+    detection_weights: np.ndarray
+
+
+def update_with_terms(mix: GaussianMixture, z: np.ndarray, terms: KalmanTerms,
+                      p_d: np.ndarray, clutter: float | np.ndarray,
+                      missed: np.ndarray | None = None) -> UpdateResult:
+    """Table I step 4 given the Kalman terms of every component, vectorised over J x M.
+
+    ``w_j(z) = p_D,j w_j N(z; eta_j, S_j) / (kappa(z) + sum_l p_D,l w_l N(z; eta_l, S_l))``,
+    mean ``m_j + K_j (z - eta_j)``, covariance ``terms.covs``; the missed-detection terms
+    ``(1 - p_D,j) w_j`` come first.
+
+    Parameters
+    ----------
+    mix : GaussianMixture
+        Predicted intensity, J components.
+    z : np.ndarray, shape (M, m)
+        Checked measurements (:func:`check_measurements`).
+    terms : KalmanTerms
+        Per-component predicted measurement, innovation covariance, gain, updated covariance.
+    p_d : np.ndarray, shape (J,)
+        Checked detection probabilities (:func:`check_p_d`).
+    clutter : float or np.ndarray, shape (M,)
+        kappa(z), the clutter intensity at each measurement, in 1 / (measurement units).
+    missed : np.ndarray of bool, shape (J,), optional
+        Components that keep a missed-detection term; all by default. A component without
+        one (a newborn of the measurement-driven birth) has weight 0 there.
+    """
+    n_comp, n_meas = len(mix), z.shape[0]
+    nz = z.shape[1]
+    w_missed = (1.0 - p_d) * mix.weights
+    if missed is not None:
+        w_missed = np.where(missed, w_missed, 0.0)
+    if n_comp == 0 or n_meas == 0:
+        return UpdateResult(GaussianMixture(w_missed, mix.means.copy(), mix.covs.copy()),
+                            np.zeros((n_meas, n_comp)))
+    chol = np.linalg.cholesky(terms.s)
+    s_inv = np.linalg.inv(terms.s)
+    if terms.innovation is None:
+        nu = z[:, None, :] - terms.eta[None, :, :]          # (M, J, m)
+    else:
+        nu = terms.innovation(z, terms.eta)
     maha = np.einsum("mji,jik,mjk->mj", nu, s_inv, nu)
     log_det = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(axis=-1)  # (J,)
     log_q = -0.5 * (maha + log_det + nz * np.log(2.0 * np.pi))             # (M, J)
@@ -318,19 +414,19 @@ def update(mix: GaussianMixture, z: np.ndarray, model: GmPhdModel,
     # by the largest term instead of giving 0/0.
     with np.errstate(divide="ignore"):
         log_num = np.log(p_d * mix.weights)[None, :] + log_q                # (M, J)
-        log_kappa = np.log(model.clutter_intensity)
-    log_den = logsumexp(np.concatenate([np.full((n_meas, 1), log_kappa), log_num], axis=1),
-                        axis=1)
+        log_kappa = np.broadcast_to(np.log(np.asarray(clutter, dtype=float)), (n_meas,))
+    log_den = logsumexp(np.concatenate([log_kappa[:, None], log_num], axis=1), axis=1)
     with np.errstate(invalid="ignore"):
         w_det = np.exp(log_num - log_den[:, None])
     w_det[~np.isfinite(log_den)] = 0.0
 
-    means_det = mix.means[None, :, :] + np.einsum("jdk,mjk->mjd", gain, nu)  # (M, J, d)
-    d = model.dim
-    return GaussianMixture(
-        np.concatenate([missed.weights, w_det.reshape(-1)]),
-        np.concatenate([missed.means, means_det.reshape(-1, d)]),
-        np.concatenate([missed.covs, np.tile(covs_upd, (n_meas, 1, 1))]))
+    means_det = mix.means[None, :, :] + np.einsum("jdk,mjk->mjd", terms.gain, nu)
+    d = mix.dim
+    out = GaussianMixture(
+        np.concatenate([w_missed, w_det.reshape(-1)]),
+        np.concatenate([mix.means, means_det.reshape(-1, d)]),
+        np.concatenate([mix.covs, np.tile(terms.covs, (n_meas, 1, 1))]))
+    return UpdateResult(out, w_det)
 
 
 def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
