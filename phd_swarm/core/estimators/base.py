@@ -40,3 +40,18 @@ class Estimator(ABC):
     @abstractmethod
     def expected_count(self) -> float:
         """Expected number of targets (the PHD's mass)."""
+
+    def export_state(self) -> dict[str, np.ndarray]:
+        """The estimator's state as plain arrays, what travels between robots.
+
+        Estimators whose state does not travel (the grid PHD, whose bins move with the
+        cells) do not override it.
+        """
+        raise NotImplementedError(f"{type(self).__name__} has no exportable state")
+
+    def import_state(self, arrays: dict[str, np.ndarray], where: str = "state") -> None:
+        """Replace the state with ``arrays`` from :meth:`export_state`, checked.
+
+        A malformed field is refused with a ``ValueError`` naming ``where``.
+        """
+        raise NotImplementedError(f"{type(self).__name__} has no importable state")

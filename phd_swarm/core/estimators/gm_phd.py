@@ -9,14 +9,17 @@ the PHD recursion keeps that form (Vo & Ma 2006, Propositions 1-2). This module 
 - :func:`predict` (Table I steps 1-2), :func:`update` (Table I steps 3-4, with a detection
   probability per component), :func:`prune_and_merge` (Table II), :func:`extract`
   (Table III);
-- :class:`GmPhdEstimator`: the estimator role (:class:`.base.Estimator`) over them.
+- :func:`linear_terms` and :func:`update_with_terms`: the update split in two, so that a
+  nonlinear measurement model (:mod:`.range_bearing`) only supplies the Kalman terms.
 
-Left out of Table I: target spawning (the spawn intensity of assumption A.3 and the
-spawn terms of steps 1-2 and Proposition 1); births are the only new components. The
-detection probability is given per component (the caller evaluates it at the mean, or
-averages it over the component), which is exact when p_D is constant over each
-component's support and an approximation otherwise; the paper's Gaussian-mixture p_D
-extension is not implemented.
+The estimator role over these functions is :class:`.gm_phd_estimator.GmPhdEstimator`.
+
+The detection probability is given per component (the caller evaluates it at the mean, or
+integrates it over the component: :mod:`.detection`), which is exact when p_D is constant
+over each component's support and an approximation otherwise; the paper's
+Gaussian-mixture p_D extension is not implemented. New components come from the birth
+intensity (A.3), from spawning (A.3, Table I step 1) and, in the estimator, from
+the measurement-driven birth rules of :mod:`.gm_births`.
 
 Reference: B.-N. Vo and W.-K. Ma, "The Gaussian mixture probability hypothesis density
 filter", IEEE Trans. Signal Processing 54(11), 2006.
@@ -29,9 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import logsumexp
-
-from ..scan import Scan
-from .base import Estimator
 
 #: p_D evaluator: (means (J, d), covs (J, d, d), sensor position (2,) [m]) -> p_D (J,).
 DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -104,6 +104,39 @@ class GaussianMixture:
         """State dimension d."""
         return self.means.shape[1]
 
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """The mixture as plain float64 arrays ``{"weights", "means", "covs"}`` (copies)."""
+        return {"weights": self.weights.copy(), "means": self.means.copy(),
+                "covs": self.covs.copy()}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], where: str = "mixture"
+                    ) -> GaussianMixture:
+        """A mixture from :meth:`to_arrays` output, checked.
+
+        What came over a link is refused with a ``ValueError`` naming ``where`` and the
+        field if it is malformed: a missing field, shapes, NaN or inf, a negative weight, a
+        covariance that is not symmetric positive definite.
+        """
+        missing = [k for k in ("weights", "means", "covs") if k not in arrays]
+        if missing:
+            raise ValueError(f"{where}: missing {', '.join(missing)}")
+        try:
+            mix = cls(arrays["weights"], arrays["means"], arrays["covs"])
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: {exc}") from None
+        for name in ("weights", "means"):
+            if not np.all(np.isfinite(getattr(mix, name))):
+                raise ValueError(f"{where}: {name} must be finite (no NaN or inf)")
+        if np.any(mix.weights < 0.0):
+            raise ValueError(f"{where}: weights must be >= 0, got {mix.weights.min()}")
+        if len(mix):
+            try:
+                _spd("covs", mix.covs)
+            except ValueError as exc:
+                raise ValueError(f"{where}: {exc}") from None
+        return mix
+
 
 @dataclass(frozen=True, eq=False)
 class GmPhdModel:
@@ -138,6 +171,15 @@ class GmPhdModel:
         J_max of Table II.
     extraction_threshold : float
         Weight above which a component yields estimates (Table III) [-].
+    spawn_weights : np.ndarray, shape (S,)
+        Spawn intensity weights w_beta (A.3) [expected spawns per target per step]; none by
+        default.
+    spawn_F : np.ndarray, shape (S, d, d)
+        Spawn transition matrices F_beta (A.3).
+    spawn_offsets : np.ndarray, shape (S, d)
+        Spawn offsets d_beta (A.3).
+    spawn_Q : np.ndarray, shape (S, d, d)
+        Spawn covariances Q_beta (A.3), SPD.
     """
 
     F: np.ndarray
@@ -153,10 +195,21 @@ class GmPhdModel:
     merge_threshold: float = 4.0
     max_components: int = 100
     extraction_threshold: float = 0.5
+    spawn_weights: np.ndarray | None = None
+    spawn_F: np.ndarray | None = None
+    spawn_offsets: np.ndarray | None = None
+    spawn_Q: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        d = np.shape(self.F)[0] if np.ndim(self.F) == 2 else 0
+        defaults = {"spawn_weights": np.empty(0), "spawn_F": np.empty((0, d, d)),
+                    "spawn_offsets": np.empty((0, d)), "spawn_Q": np.empty((0, d, d))}
+        for name, empty in defaults.items():
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, empty)
         arrays = {}
-        for name in ("F", "Q", "H", "R", "birth_weights", "birth_means", "birth_covs"):
+        for name in ("F", "Q", "H", "R", "birth_weights", "birth_means", "birth_covs",
+                     *defaults):
             a = np.array(getattr(self, name), dtype=float)
             a.flags.writeable = False
             arrays[name] = a
@@ -189,6 +242,19 @@ class GmPhdModel:
             raise ValueError("birth_weights must be >= 0")
         _finite("birth_means", bm)
         _spd("birth_covs", bc)
+        sw, sf, so, sq = (arrays[k] for k in defaults)
+        n_spawn = sw.shape[0] if sw.ndim == 1 else -1
+        for name, a, shape in (("spawn_weights", sw, (n_spawn,)),
+                               ("spawn_F", sf, (n_spawn, d, d)),
+                               ("spawn_offsets", so, (n_spawn, d)),
+                               ("spawn_Q", sq, (n_spawn, d, d))):
+            if n_spawn < 0 or a.shape != shape:
+                raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
+            _finite(name, a)
+        if np.any(sw < 0.0):
+            raise ValueError("spawn_weights must be >= 0")
+        if n_spawn:
+            _spd("spawn_Q", sq)
         _probability("p_s", np.asarray(self.p_s, dtype=float))
         for name in ("clutter_intensity", "prune_threshold", "merge_threshold",
                      "extraction_threshold"):
@@ -219,31 +285,42 @@ def _check_mixture(mix: GaussianMixture, model: GmPhdModel) -> None:
 
 
 def predict(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
-    """Predicted intensity v_{k|k-1}: births plus surviving components (Table I steps 1-2).
+    """Predicted intensity v_{k|k-1}: births, spawns and survivors (Table I steps 1-2).
 
-    Surviving component j: ``w = p_S w_j``, ``m = F m_j``, ``P = Q + F P_j F^T``
-    (Proposition 1); the births (A.3) come first, as in Table I. Spawning is not modelled.
+    Births are the birth intensity (A.3). Spawn beta of component j (Proposition 1):
+    ``w = w_j w_beta``, ``m = F_beta m_j + d_beta``, ``P = Q_beta + F_beta P_j F_beta^T``.
+    Surviving component j: ``w = p_S w_j``, ``m = F m_j``, ``P = Q + F P_j F^T``.
 
     Parameters
     ----------
     mix : GaussianMixture
         Posterior intensity v_{k-1}, J components of dimension d.
     model : GmPhdModel
-        Motion model (F, Q, p_S) and birth intensity (B components).
+        Motion model (F, Q, p_S), birth intensity (B components), spawn intensity (S terms).
 
     Returns
     -------
     GaussianMixture
-        B + J components: the births, then the survivors in the order of ``mix``.
+        B + S J + J components: the births, the spawns (for each spawn term, one per
+        component of ``mix``), then the survivors in the order of ``mix``.
     """
     _check_mixture(mix, model)
     f = model.F
     means = mix.means @ f.T
     covs = f @ mix.covs @ f.T + model.Q
-    return GaussianMixture(
-        np.concatenate([model.birth_weights, model.p_s * mix.weights]),
-        np.concatenate([model.birth_means, means]),
-        np.concatenate([model.birth_covs, covs]))
+    weights = [model.birth_weights]
+    all_means = [model.birth_means]
+    all_covs = [model.birth_covs]
+    if model.spawn_weights.size and len(mix):
+        fb = model.spawn_F[:, None]                                     # (S, 1, d, d)
+        weights.append((model.spawn_weights[:, None] * mix.weights[None, :]).reshape(-1))
+        all_means.append((np.einsum("sik,jk->sji", model.spawn_F, mix.means)
+                          + model.spawn_offsets[:, None, :]).reshape(-1, model.dim))
+        spawn_covs = fb @ mix.covs[None] @ np.swapaxes(fb, -1, -2) + model.spawn_Q[:, None]
+        all_covs.append(spawn_covs.reshape(-1, model.dim, model.dim))
+    return GaussianMixture(np.concatenate([*weights, model.p_s * mix.weights]),
+                           np.concatenate([*all_means, means]),
+                           np.concatenate([*all_covs, covs]))
 
 
 def update(mix: GaussianMixture, z: np.ndarray, model: GmPhdModel,
@@ -512,51 +589,3 @@ def constant_p_d(p: float) -> DetectionProbability:
         return np.full(means.shape[0], p)
 
     return p_d
-
-
-class GmPhdEstimator(Estimator):
-    """GM-PHD filter as an estimator: Table I prediction and update, Table II after each update.
-
-    The state's first two coordinates are the target position [m] (world frame) and the
-    measurement space is 2-D (a scan's z), so the model needs d >= 2 and H with 2 rows.
-
-    Parameters
-    ----------
-    model : GmPhdModel
-        Models and reduction settings.
-    mixture : GaussianMixture, optional
-        Initial intensity; empty by default.
-    p_d : callable, optional
-        ``p_d(means (J, d), covs (J, d, d), sensor (2,) [m]) -> (J,)``, the detection
-        probability of each component for a scan taken at ``sensor``; 0.9 everywhere by
-        default.
-    """
-
-    def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
-                 p_d: DetectionProbability | None = None) -> None:
-        if model.dim < 2 or model.measurement_dim != 2:
-            raise ValueError(f"GmPhdEstimator needs a state of dimension >= 2 and 2-D "
-                             f"measurements, got d={model.dim}, m={model.measurement_dim}")
-        self.model = model
-        self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
-        _check_mixture(self.mixture, model)
-        self._p_d = constant_p_d(0.9) if p_d is None else p_d
-
-    def predict(self) -> None:
-        """Births and survivors over one step (Table I steps 1-2)."""
-        self.mixture = predict(self.mixture, self.model)
-
-    def update(self, scan: Scan) -> None:
-        """Update with ``scan`` (Table I steps 3-4), then prune and merge (Table II)."""
-        p_d = np.asarray(self._p_d(self.mixture.means, self.mixture.covs, scan.sensor),
-                         dtype=float)
-        self.mixture = prune_and_merge(update(self.mixture, scan.z, self.model, p_d),
-                                       self.model)
-
-    def estimates(self) -> np.ndarray:
-        """Estimated target positions (N, 2) [m]: the first two coordinates (Table III)."""
-        return extract(self.mixture, self.model)[:, :2]
-
-    def expected_count(self) -> float:
-        """Expected number of targets, the sum of the weights."""
-        return float(self.mixture.weights.sum())

@@ -1,0 +1,154 @@
+"""New GM-PHD components from the measurements: the two measurement-driven birth rules.
+
+A fixed birth intensity (Vo & Ma A.3) must cover every place a target can appear; when
+targets can appear anywhere that is wasteful and slow to confirm. Both rules here place the
+new components where the measurements are. The state's first two coordinates are the
+target position [m]; the others (a velocity, say) start at ``other_mean`` with covariance
+``other_cov``.
+
+- :class:`AdaptiveBirth`, after Ristic, Clark, Vo & Vo (2012), "Adaptive target birth
+  intensity for PHD and CPHD filters", IEEE Trans. AES 48(2). The targets are labelled
+  persistent or newborn. Measurement z of step k proposes a newborn component for step k+1
+  at z, with weight
+
+  ``nu_B (1 - U_k(z)) / sum_{z' in Z_k} (1 - U_k(z'))``,
+
+  where nu_B is the expected number of births per step and ``U_k(z)`` the share of z that
+  the update gave the persistent components: ``sum_j w_j(z)`` over persistent j. A
+  measurement the persistent targets explain proposes little. In the update of step k+1 a
+  newborn component has no missed-detection term: a newborn target is one detected for the
+  first time, so an undetected newborn is not a target (:func:`.gm_phd.update_with_terms`,
+  ``missed``). The estimator (:class:`.gm_phd_estimator.GmPhdEstimator`) flags the newborns and
+  computes ``U_k``.
+- :class:`PerMeasurementBirth`, Sung & Tokekar (Sec. V-D): after pruning and merging, one
+  new component per measurement of the step, weight 1, mean the measured position,
+  covariance the measurement noise R. It overestimates the number of targets (the paper
+  says so, Sec. VI-A); it is there to reproduce that paper.
+
+Where the measurement is not a position (range-bearing), the caller gives the position it
+implies and that position's covariance (``positions``, ``position_covs``): the inverse of
+the measurement model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .gm_phd import GaussianMixture
+
+
+def _check_other(other_mean: np.ndarray | None, other_cov: np.ndarray | None,
+                 dim: int) -> tuple[np.ndarray, np.ndarray]:
+    n = dim - 2
+    mean = np.zeros(n) if other_mean is None else np.asarray(other_mean, dtype=float)
+    cov = np.eye(n) if other_cov is None else np.asarray(other_cov, dtype=float)
+    if mean.shape != (n,):
+        raise ValueError(f"other_mean must have shape ({n},) for a state of dimension {dim}, "
+                         f"got {mean.shape}")
+    if cov.shape != (n, n):
+        raise ValueError(f"other_cov must have shape ({n}, {n}) for a state of dimension "
+                         f"{dim}, got {cov.shape}")
+    if n and (not np.all(np.isfinite(cov)) or not np.allclose(cov, cov.T)
+              or np.any(np.linalg.eigvalsh(cov) <= 0.0)):
+        raise ValueError("other_cov must be finite, symmetric and positive definite")
+    return mean, cov
+
+
+def place(positions: np.ndarray, position_covs: np.ndarray, weights: np.ndarray, dim: int,
+          other_mean: np.ndarray | None = None,
+          other_cov: np.ndarray | None = None) -> GaussianMixture:
+    """Components at ``positions`` (M, 2) with position covariances (M, 2, 2).
+
+    In a state of dimension ``dim``, the position block comes from the measurement, the
+    rest from (``other_mean``, ``other_cov``), uncorrelated with the position.
+    """
+    mean_o, cov_o = _check_other(other_mean, other_cov, dim)
+    n = positions.shape[0]
+    means = np.empty((n, dim))
+    means[:, :2] = positions
+    means[:, 2:] = mean_o
+    covs = np.zeros((n, dim, dim))
+    covs[:, :2, :2] = position_covs
+    covs[:, 2:, 2:] = cov_o
+    return GaussianMixture(np.asarray(weights, dtype=float), means, covs)
+
+
+@dataclass(frozen=True, eq=False)
+class AdaptiveBirth:
+    """Ristic et al. (2012) measurement-driven birth intensity (see the module docstring).
+
+    Attributes
+    ----------
+    expected_births : float
+        nu_B, the expected number of target births per step [-], >= 0.
+    other_mean : np.ndarray, shape (d - 2,), optional
+        Mean of the non-position coordinates of a newborn (zeros by default).
+    other_cov : np.ndarray, shape (d - 2, d - 2), optional
+        Their covariance (identity by default), SPD.
+    """
+
+    expected_births: float
+    other_mean: np.ndarray | None = None
+    other_cov: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        nu = float(self.expected_births)
+        if not np.isfinite(nu) or nu < 0.0:
+            raise ValueError(f"expected_births must be finite and >= 0, got "
+                             f"{self.expected_births!r}")
+        object.__setattr__(self, "expected_births", nu)
+
+    def components(self, positions: np.ndarray, position_covs: np.ndarray,
+                   associated: np.ndarray, dim: int) -> GaussianMixture:
+        """Newborn components for the next step from this step's measurements.
+
+        Parameters
+        ----------
+        positions : np.ndarray, shape (M, 2)
+            Positions the measurements imply [m].
+        position_covs : np.ndarray, shape (M, 2, 2)
+            Their covariances [m^2].
+        associated : np.ndarray, shape (M,)
+            U_k(z), the share of each measurement given to persistent components [-], in
+            [0, 1].
+        dim : int
+            State dimension d.
+        """
+        free = np.clip(1.0 - np.asarray(associated, dtype=float), 0.0, 1.0)
+        total = free.sum()
+        weights = (self.expected_births * free / total if total > 0.0
+                   else np.zeros_like(free))
+        return place(positions, position_covs, weights, dim, self.other_mean, self.other_cov)
+
+
+@dataclass(frozen=True, eq=False)
+class PerMeasurementBirth:
+    """Sung & Tokekar (Sec. V-D): one component per measurement, weight 1, covariance R.
+
+    Attributes
+    ----------
+    weight : float
+        Weight of each new component [-] (1 in the paper), > 0.
+    other_mean : np.ndarray, shape (d - 2,), optional
+        Mean of the non-position coordinates (zeros by default).
+    other_cov : np.ndarray, shape (d - 2, d - 2), optional
+        Their covariance (identity by default), SPD.
+    """
+
+    weight: float = 1.0
+    other_mean: np.ndarray | None = None
+    other_cov: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        w = float(self.weight)
+        if not np.isfinite(w) or w <= 0.0:
+            raise ValueError(f"weight must be finite and > 0, got {self.weight!r}")
+        object.__setattr__(self, "weight", w)
+
+    def components(self, positions: np.ndarray, position_covs: np.ndarray,
+                   dim: int) -> GaussianMixture:
+        """One component per measurement at its position with its covariance (R)."""
+        return place(positions, position_covs, np.full(positions.shape[0], self.weight), dim,
+                     self.other_mean, self.other_cov)

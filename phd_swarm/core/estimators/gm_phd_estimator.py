@@ -1,0 +1,210 @@
+"""The GM-PHD filter as an estimator (:class:`.base.Estimator`): one robot's mixture.
+
+Each step: :meth:`GmPhdEstimator.predict` (Vo & Ma Table I steps 1-2, plus the newborn
+components proposed by the last scan under :class:`.gm_births.AdaptiveBirth`), then
+:meth:`GmPhdEstimator.update` with a scan (Table I steps 3-4 through a measurement model,
+then Table II, then :class:`.gm_births.PerMeasurementBirth` if chosen). The equations are
+in :mod:`.gm_phd`; this module holds the state between steps and what depends on the
+sensor pose: the detection probability, the measurement model and the clutter.
+
+A measurement model gives the Kalman terms of every component for a scan taken at a sensor
+position (:class:`.gm_phd.KalmanTerms`), the clutter intensity at each measurement, and the
+positions the measurements imply (for the birth rules). :class:`LinearMeasurement` is the
+linear-Gaussian one of the model (z = H x + v); the range-bearing sensor's EKF and UKF forms
+are in :mod:`.range_bearing`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ..scan import Scan
+from .base import Estimator
+from .gm_births import AdaptiveBirth, PerMeasurementBirth
+from .gm_phd import (
+    DetectionProbability,
+    GaussianMixture,
+    GmPhdModel,
+    KalmanTerms,
+    check_measurements,
+    check_p_d,
+    constant_p_d,
+    extract,
+    linear_terms,
+    predict,
+    prune_and_merge,
+    update_with_terms,
+)
+
+
+class MeasurementModel(Protocol):
+    """What the GM-PHD update needs from a sensor's measurement model."""
+
+    #: Dimension m of a measurement.
+    dim: int
+
+    def terms(self, mix: GaussianMixture, sensor: np.ndarray) -> KalmanTerms:
+        """Kalman terms of every component for a scan taken at ``sensor`` (2,) [m]."""
+
+    def clutter(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        """kappa(z), the clutter intensity at each measurement (M,)."""
+
+    def positions(self, z: np.ndarray, sensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (M, 2) [m] the measurements imply and their covariances (M, 2, 2)."""
+
+
+@dataclass(frozen=True, eq=False)
+class LinearMeasurement:
+    """z = H x + v, v ~ N(0, R), with clutter of constant intensity (Vo & Ma A.1).
+
+    Attributes
+    ----------
+    H : np.ndarray, shape (m, d)
+        Observation matrix.
+    R : np.ndarray, shape (m, m)
+        Measurement noise covariance, SPD.
+    clutter_intensity : float
+        kappa, constant over the measurement space [1 / measurement units], >= 0.
+    """
+
+    H: np.ndarray
+    R: np.ndarray
+    clutter_intensity: float
+
+    @classmethod
+    def of(cls, model: GmPhdModel) -> LinearMeasurement:
+        """The measurement model held by a :class:`.gm_phd.GmPhdModel`."""
+        return cls(model.H, model.R, model.clutter_intensity)
+
+    @property
+    def dim(self) -> int:
+        """Measurement dimension m."""
+        return self.H.shape[0]
+
+    def terms(self, mix: GaussianMixture, sensor: np.ndarray) -> KalmanTerms:
+        """Linear Kalman terms (Table I step 3); the sensor pose does not enter."""
+        return linear_terms(mix, self.H, self.R)
+
+    def clutter(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        """The constant kappa at every measurement."""
+        return np.full(z.shape[0], self.clutter_intensity)
+
+    def positions(self, z: np.ndarray, sensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Z itself with covariance R, when z measures the position: H = [I_2 0]."""
+        d = self.H.shape[1]
+        position = np.zeros((2, d))
+        position[:, :2] = np.eye(2)
+        if self.H.shape != (2, d) or not np.array_equal(self.H, position):
+            raise ValueError("measurement-driven births need position measurements, "
+                             f"H = [I_2 0]; got H = {self.H.tolist()}")
+        return z.copy(), np.broadcast_to(self.R, (z.shape[0], 2, 2)).copy()
+
+
+BirthRule = AdaptiveBirth | PerMeasurementBirth | None
+
+
+class GmPhdEstimator(Estimator):
+    """GM-PHD filter as an estimator: predict, update with a scan, prune and merge.
+
+    The state's first two coordinates are the target position [m] (world frame).
+
+    Parameters
+    ----------
+    model : GmPhdModel
+        Motion model, fixed birth and spawn intensities, reduction and extraction settings.
+    mixture : GaussianMixture, optional
+        Initial intensity; empty by default.
+    p_d : callable, optional
+        ``p_d(means (J, d), covs (J, d, d), sensor (2,) [m]) -> (J,)``, the detection
+        probability of each component for a scan taken at ``sensor`` (:mod:`.detection`
+        has the field-of-view models); 0.9 everywhere by default.
+    measurement : MeasurementModel, optional
+        The sensor's measurement model; the model's linear one (H, R, kappa) by default.
+    birth : AdaptiveBirth or PerMeasurementBirth, optional
+        A measurement-driven birth rule (:mod:`.gm_births`), in addition to the model's
+        fixed birth intensity; none by default.
+    """
+
+    def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
+                 p_d: DetectionProbability | None = None,
+                 measurement: MeasurementModel | None = None,
+                 birth: BirthRule = None) -> None:
+        if model.dim < 2:
+            raise ValueError(f"GmPhdEstimator needs a state whose first two coordinates are "
+                             f"the position, got d={model.dim}")
+        self.model = model
+        self.measurement = LinearMeasurement.of(model) if measurement is None else measurement
+        self.birth = birth
+        self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
+        if self.mixture.dim != model.dim:
+            raise ValueError(f"initial mixture has dimension {self.mixture.dim}, the model "
+                             f"{model.dim}")
+        self._p_d = constant_p_d(0.9) if p_d is None else p_d
+        self._newborn = np.zeros(len(self.mixture), dtype=bool)
+        self._proposed = GaussianMixture.empty(model.dim)
+
+    def predict(self) -> None:
+        """Births, spawns and survivors (Table I steps 1-2), then last scan's newborns."""
+        predicted = predict(self.mixture, self.model)
+        self.mixture = GaussianMixture(
+            np.concatenate([predicted.weights, self._proposed.weights]),
+            np.concatenate([predicted.means, self._proposed.means]),
+            np.concatenate([predicted.covs, self._proposed.covs]))
+        self._newborn = np.concatenate([np.zeros(len(predicted), dtype=bool),
+                                        np.ones(len(self._proposed), dtype=bool)])
+        self._proposed = GaussianMixture.empty(self.model.dim)
+
+    def update(self, scan: Scan) -> None:
+        """Update with ``scan`` (Table I steps 3-4), prune and merge (Table II), births."""
+        sensor = scan.sensor
+        z = check_measurements(scan.z, self.measurement.dim)
+        mix, newborn = self.mixture, self._newborn
+        p_d = check_p_d(self._p_d(mix.means, mix.covs, sensor), len(mix))
+        terms = (self.measurement.terms(mix, sensor) if len(mix) and len(z) else None)
+        if terms is None:
+            weights = np.where(newborn, 0.0, (1.0 - p_d) * mix.weights)
+            posterior = GaussianMixture(weights, mix.means, mix.covs)
+            shares = np.zeros((len(z), len(mix)))
+        else:
+            result = update_with_terms(mix, z, terms, p_d, self.measurement.clutter(z, sensor),
+                                       missed=~newborn)
+            posterior, shares = result.mixture, result.detection_weights
+        self.mixture = prune_and_merge(posterior, self.model)
+        self._newborn = np.zeros(len(self.mixture), dtype=bool)
+        if self.birth is None or len(z) == 0:
+            return
+        positions, covs = self.measurement.positions(z, sensor)
+        if isinstance(self.birth, AdaptiveBirth):
+            associated = shares[:, ~newborn].sum(axis=1)
+            self._proposed = self.birth.components(positions, covs, associated, self.model.dim)
+        else:
+            new = self.birth.components(positions, covs, self.model.dim)
+            self.mixture = GaussianMixture(
+                np.concatenate([self.mixture.weights, new.weights]),
+                np.concatenate([self.mixture.means, new.means]),
+                np.concatenate([self.mixture.covs, new.covs]))
+            self._newborn = np.zeros(len(self.mixture), dtype=bool)
+
+    def estimates(self) -> np.ndarray:
+        """Estimated target positions (N, 2) [m]: the first two coordinates (Table III)."""
+        return extract(self.mixture, self.model)[:, :2]
+
+    def expected_count(self) -> float:
+        """Expected number of targets, the sum of the weights."""
+        return float(self.mixture.weights.sum())
+
+    def export_state(self) -> dict[str, np.ndarray]:
+        """The mixture as plain arrays (:meth:`.gm_phd.GaussianMixture.to_arrays`)."""
+        return self.mixture.to_arrays()
+
+    def import_state(self, arrays: dict[str, np.ndarray], where: str = "mixture") -> None:
+        """Replace the mixture with checked arrays (refused with ``where`` named if bad)."""
+        mix = GaussianMixture.from_arrays(arrays, where)
+        if mix.dim != self.model.dim:
+            raise ValueError(f"{where}: state dimension {mix.dim}, the model's is "
+                             f"{self.model.dim}")
+        self.mixture = mix
+        self._newborn = np.zeros(len(mix), dtype=bool)
