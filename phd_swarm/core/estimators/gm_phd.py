@@ -533,27 +533,36 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
     w, m, p = mix.weights[keep], mix.means[keep], mix.covs[keep]
     if w.size == 0:
         return GaussianMixture.empty(model.dim)
+    # Greedy grouping: the heaviest component not yet taken (ties to the lowest index, as
+    # argmax) takes every remaining i within U of it, in the metric of P_i. Only the group
+    # labels are found in this loop, one cheap pass per group over all J; the moments of
+    # all groups are then computed at once.
     p_inv = np.linalg.inv(p)
-    remaining = np.ones(w.size, dtype=bool)
-    out_w, out_m, out_p = [], [], []
-    while remaining.any():
-        idx = np.flatnonzero(remaining)
-        j = idx[np.argmax(w[idx])]
-        diff = m[idx] - m[j]
-        dist = np.einsum("ni,nik,nk->n", diff, p_inv[idx], diff)
-        group = idx[dist <= model.merge_threshold]
-        wg = w[group]
-        w_sum = wg.sum()
-        mean = wg @ m[group] / w_sum
-        dm = mean - m[group]
-        cov = np.einsum("n,nik->ik", wg, p[group] + dm[:, :, None] * dm[:, None, :]) / w_sum
-        out_w.append(w_sum)
-        out_m.append(mean)
-        out_p.append(0.5 * (cov + cov.T))
-        remaining[group] = False
-    weights = np.asarray(out_w)
-    order = np.argsort(-weights, kind="stable")[:model.max_components]
-    return GaussianMixture(weights[order], np.asarray(out_m)[order], np.asarray(out_p)[order])
+    n = w.size
+    labels = np.full(n, -1)
+    taken = np.zeros(n, dtype=bool)
+    n_groups = 0
+    for j in np.argsort(-w, kind="stable"):
+        if taken[j]:
+            continue
+        diff = m - m[j]
+        dist = np.einsum("ni,nik,nk->n", diff, p_inv, diff)
+        group = (dist <= model.merge_threshold) & ~taken
+        group[j] = True
+        labels[group] = n_groups
+        taken |= group
+        n_groups += 1
+    by_group = np.argsort(labels, kind="stable")
+    starts = np.searchsorted(labels[by_group], np.arange(n_groups))
+    wg, mg, pg = w[by_group], m[by_group], p[by_group]
+    w_sum = np.add.reduceat(wg, starts)
+    mean = np.add.reduceat(wg[:, None] * mg, starts) / w_sum[:, None]
+    dm = mean[labels[by_group]] - mg
+    spread = wg[:, None, None] * (pg + dm[:, :, None] * dm[:, None, :])
+    cov = np.add.reduceat(spread, starts) / w_sum[:, None, None]
+    cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
+    order = np.argsort(-w_sum, kind="stable")[:model.max_components]
+    return GaussianMixture(w_sum[order], mean[order], cov[order])
 
 
 def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:
