@@ -132,3 +132,37 @@ def test_empty_scan_and_nan_measurements():
     bad = SimpleNamespace(sensor=np.zeros(2), z=np.array([[0.0, 0.0], [np.nan, 1.0]]))
     with pytest.raises(ValueError, match=r"row 1 is \[nan, 1.0\]"):
         est.update(bad)
+
+
+@pytest.mark.parametrize("method", ["ekf", "ukf"])
+def test_range_bearing_estimator_finds_and_tracks_from_measurement_births(method):
+    """The Papaioannou sensor end to end, with births from the measurements.
+
+    No birth intensity: births come from the measurements (inverse range-bearing model);
+    EKF or UKF update. Two static targets in the square sensing area are found and
+    localised within the range noise (sd 1 m). Not to the 0.2 m that 25 scans would give:
+    the newborn mass proposed at every scan's measurements merges into the track and pulls
+    it by a fraction of the noise (over 20 seeds, worst of the two targets: median 0.45 m,
+    largest 1.07 m; 0.62 m without births).
+    """
+    from phd_swarm.core.estimators.range_bearing import (
+        RangeBearingMeasurement,
+        RangeBearingSensor,
+    )
+
+    rng = np.random.default_rng(5)
+    sensor_model = RangeBearingSensor()
+    targets = np.array([[3.0, 2.0], [-2.0, -3.5]])
+    sensor = np.array([0.5, 0.0])
+    est = GmPhdEstimator(_static_model(Q=1e-4 * np.eye(2)), p_d=constant_p_d(0.99),
+                         measurement=RangeBearingMeasurement(sensor_model, method=method,
+                                                             clutter_rate=2.0),
+                         birth=AdaptiveBirth(expected_births=0.5))
+    for k in range(25):
+        z = sensor_model.simulate(rng, targets, sensor)
+        est.predict()
+        est.update(_scan(k, z, sensor))
+    assert round(est.expected_count()) == 2
+    found = est.estimates()
+    d = np.linalg.norm(found[:, None] - targets[None], axis=-1)
+    assert len(found) == 2 and d.min(axis=0).max() < 1.2
