@@ -33,30 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
+from .checks import check_finite, check_measurements, check_probability, check_spd
+
 #: p_D evaluator: (means (J, d), covs (J, d, d), sensor position (2,) [m]) -> p_D (J,).
 DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
-
-
-def _finite(name: str, a: np.ndarray) -> None:
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be finite (no NaN or inf)")
-
-
-def _spd(name: str, a: np.ndarray) -> None:
-    """Raise unless every matrix of the stack ``a`` (..., n, n) is symmetric positive definite."""
-    _finite(name, a)
-    if not np.allclose(a, np.swapaxes(a, -1, -2), rtol=1e-9, atol=1e-12):
-        raise ValueError(f"{name} must be symmetric")
-    try:
-        np.linalg.cholesky(a)
-    except np.linalg.LinAlgError:
-        raise ValueError(f"{name} must be positive definite") from None
-
-
-def _probability(name: str, p: np.ndarray) -> None:
-    _finite(name, p)
-    if np.any((p < 0.0) | (p > 1.0)):
-        raise ValueError(f"{name} must lie in [0, 1]")
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,7 +112,7 @@ class GaussianMixture:
             raise ValueError(f"{where}: weights must be >= 0, got {mix.weights.min()}")
         if len(mix):
             try:
-                _spd("covs", mix.covs)
+                check_spd("covs", mix.covs)
             except ValueError as exc:
                 raise ValueError(f"{where}: {exc}") from None
         return mix
@@ -233,15 +213,15 @@ class GmPhdModel:
             raise ValueError(f"birth_means must have shape ({b}, {d}), got {bm.shape}")
         if bc.shape != (b, d, d):
             raise ValueError(f"birth_covs must have shape ({b}, {d}, {d}), got {bc.shape}")
-        _finite("F", f)
-        _finite("H", h)
-        _spd("Q", q)
-        _spd("R", r)
-        _finite("birth_weights", bw)
+        check_finite("F", f)
+        check_finite("H", h)
+        check_spd("Q", q)
+        check_spd("R", r)
+        check_finite("birth_weights", bw)
         if np.any(bw < 0.0):
             raise ValueError("birth_weights must be >= 0")
-        _finite("birth_means", bm)
-        _spd("birth_covs", bc)
+        check_finite("birth_means", bm)
+        check_spd("birth_covs", bc)
         sw, sf, so, sq = (arrays[k] for k in defaults)
         n_spawn = sw.shape[0] if sw.ndim == 1 else -1
         for name, a, shape in (("spawn_weights", sw, (n_spawn,)),
@@ -250,12 +230,12 @@ class GmPhdModel:
                                ("spawn_Q", sq, (n_spawn, d, d))):
             if n_spawn < 0 or a.shape != shape:
                 raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
-            _finite(name, a)
+            check_finite(name, a)
         if np.any(sw < 0.0):
             raise ValueError("spawn_weights must be >= 0")
         if n_spawn:
-            _spd("spawn_Q", sq)
-        _probability("p_s", np.asarray(self.p_s, dtype=float))
+            check_spd("spawn_Q", sq)
+        check_probability("p_s", np.asarray(self.p_s, dtype=float))
         for name in ("clutter_intensity", "prune_threshold", "merge_threshold",
                      "extraction_threshold"):
             v = float(getattr(self, name))
@@ -360,27 +340,12 @@ def update(mix: GaussianMixture, z: np.ndarray, model: GmPhdModel,
     return update_with_terms(mix, z, terms, p_d, model.clutter_intensity).mixture
 
 
-def check_measurements(z: np.ndarray, measurement_dim: int) -> np.ndarray:
-    """``z`` as a float array (M, m), refused with a clear error if malformed or not finite."""
-    z = np.asarray(z, dtype=float)
-    if z.size == 0:
-        z = z.reshape(0, measurement_dim)
-    if z.ndim != 2 or z.shape[1] != measurement_dim:
-        raise ValueError(f"measurements z must have shape (M, {measurement_dim}), "
-                         f"got {z.shape}")
-    bad = ~np.all(np.isfinite(z), axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"measurements z must be finite: row {i} is {z[i].tolist()}")
-    return z
-
-
 def check_p_d(p_d: np.ndarray, n: int) -> np.ndarray:
     """``p_d`` as a float array (n,) in [0, 1], refused with a clear error otherwise."""
     p_d = np.asarray(p_d, dtype=float)
     if p_d.shape != (n,):
         raise ValueError(f"p_d must have shape ({n},), got {p_d.shape}")
-    _probability("p_d", p_d)
+    check_probability("p_d", p_d)
     return p_d
 
 
@@ -591,7 +556,7 @@ def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:
 
 def constant_p_d(p: float) -> DetectionProbability:
     """A detection probability ``p`` for every component, wherever the sensor is."""
-    _probability("p_d", np.asarray(p, dtype=float))
+    check_probability("p_d", np.asarray(p, dtype=float))
     p = float(p)
 
     def p_d(means: np.ndarray, covs: np.ndarray, sensor: np.ndarray) -> np.ndarray:
