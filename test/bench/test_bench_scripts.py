@@ -81,3 +81,33 @@ def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path)
     (stop,) = data["results"]["interrupts"]
     assert stop["exit_code"] == 130 and stop["processes_left"] == 0
     assert "| ms / msg |" in result.stdout
+
+
+def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
+    # --no-stonesoup: the project's .venv only, no Stone Soup, no network.
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "estimators", "--quick",
+                             "--no-stonesoup", "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "stonesoup 1.9.1" not in result.stdout
+    lines = result.stdout.splitlines()
+    assert any(ln.startswith("B ") and "phd_swarm" in ln and "GM-PHD" in ln for ln in lines)
+    assert any(ln.startswith("A ") and "p_D at mean" in ln for ln in lines)
+    data = json.loads(next(tmp_path.glob("estimators-*.json")).read_text())
+    rows = {(r["scenario"], r["variant"]): r for r in data["results"]}
+    assert {r["implementation"] for r in rows.values()} == {"phd_swarm"}
+    b, a = rows[("B", "GM-PHD")], rows[("A", "GM-PHD p_D at mean")]
+    assert (b["steps"], a["steps"]) == (20, 60)
+    for r in (a, b):
+        assert 0 < r["median_ms"] <= r["p95_ms"] and r["mean_size"] > 0
+        assert len(r["ospa_per_step"]) == r["steps"] == len(r["ms_per_step"])
+        assert 0 <= r["ospa_last_half"] <= r["ospa_c"]
+        assert r["speedup_vs_stonesoup"] is None
+    # The oracle knows every target seen so far: nothing tracks better.
+    assert 0 <= a["oracle_ospa_last_half"] <= a["ospa_last_half"]
+    # Tracking ten targets in clutter: well under the cut-off once the filter has them,
+    # with either filter and either sensor.
+    assert b["ospa_last_half"] < 0.5 * b["ospa_c"]
+    for key in (("smc", "SMC-PHD"), ("B-rb", "GM-PHD EKF"), ("B-rb", "GM-PHD UKF"),
+                ("B-rb", "SMC-PHD")):
+        assert rows[key]["ospa_last_half"] < 0.5 * rows[key]["ospa_c"], key
