@@ -46,8 +46,8 @@ Scenario A (search, limited field of view), 500 steps (``--quick``: 60):
   reduction T = 1e-5, U = 4, J_max = 100;
 - p_D of a component: at its mean (0.9 if the mean is inside the disk, else 0) for Stone
   Soup (a custom updater) and for our "mean" row; our "integrated" row uses
-  ``phd_swarm.core.estimators.detection.DiskFov(25, 0.9, integrate=True)`` when that module
-  exists (see :func:`our_a_pd`). OSPA c = 100 m, p = 2, and the oracle OSPA: the estimate is
+  ``phd_swarm.core.estimators.detection.DiskFov(25, 0.9, integrate=True)``
+  (:func:`our_a_pd`). OSPA c = 100 m, p = 2, and the oracle OSPA: the estimate is
   every target that has been inside the FoV at some step so far, exactly.
 
 SMC-PHD on B (``--only smc`` or the default run): Stone Soup's SMCPHDPredictor/Updater with
@@ -267,37 +267,20 @@ def search_prior(spec: SearchSpec) -> tuple[np.ndarray, ...]:
 DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def disk_p_d_at_mean(radius: float, p_inside: float) -> DetectionProbability:
-    """p_D of each component at its mean: ``p_inside`` within ``radius`` of the sensor, else 0."""
-    def p_d(means: np.ndarray, covs: np.ndarray, sensor: np.ndarray) -> np.ndarray:
-        inside = np.hypot(means[:, 0] - sensor[0], means[:, 1] - sensor[1]) <= radius
-        return np.where(inside, p_inside, 0.0)
-    return p_d
-
-
-def our_a_pd(kind: str, spec: SearchSpec | None = None) -> DetectionProbability | None:
-    """HOOK: the detection model of our GM-PHD on scenario A.
+def our_a_pd(kind: str, spec: SearchSpec | None = None) -> DetectionProbability:
+    """The detection model of our GM-PHD on scenario A.
 
     ``kind`` "mean": p_D at the component mean (what Stone Soup does). ``kind``
-    "integrated": the integrated-FoV model ``DiskFov(radius, p_inside, integrate=True)`` of
-    :mod:`phd_swarm.core.estimators.detection`, imported lazily; ``None`` (with a printed
-    note) while that module or class is missing. The returned callable follows
-    ``p_d(means (J, d), covs (J, d, d), sensor (2,)) -> (J,)``.
+    "integrated": ``DiskFov(radius, p_inside, integrate=True)`` of
+    :mod:`phd_swarm.core.estimators.detection`, p_inside times the component's mass in the
+    FoV (Sung & Tokekar eq. 9-10).
     """
+    from phd_swarm.core.estimators.detection import DiskFov
+
     spec = spec or SearchSpec()
-    if kind == "mean":
-        return disk_p_d_at_mean(spec.radius, spec.p_d)
-    if kind != "integrated":
+    if kind not in ("mean", "integrated"):
         raise ValueError(f"unknown p_D kind {kind!r}")
-    try:
-        from phd_swarm.core.estimators.detection import DiskFov
-    except ImportError as exc:
-        print(f"note: integrated-FoV p_D unavailable ({exc}); scenario A runs with p_D at "
-              "the component mean only")
-        return None
-    fov = DiskFov(spec.radius, spec.p_d, integrate=True)
-    # The estimator wants a callable p_d(means, covs, sensor); accept either form.
-    return fov if callable(fov) else fov.p_d
+    return DiskFov(spec.radius, spec.p_d, integrate=kind == "integrated")
 
 
 @dataclass
@@ -581,10 +564,9 @@ def main(argv: list[str] | None = None) -> int:
         model, prior = search_model(a_spec)
         for kind, label in (("mean", "GM-PHD p_D at mean"),
                             ("integrated", "GM-PHD integrated p_D")):
-            p_d = our_a_pd(kind, a_spec)
-            if p_d is not None:
-                rows.append(summarise("A", OURS, label, run_ours_gm(a_data, model, prior, p_d),
-                                      a_data, c, p, "components"))
+            rows.append(summarise("A", OURS, label,
+                                  run_ours_gm(a_data, model, prior, our_a_pd(kind, a_spec)),
+                                  a_data, c, p, "components"))
         if ss is not None:
             rows.append(summarise("A", STONESOUP, f"GM-PHD p_D at mean gate {args.ss_gate:g}",
                                   Run(**ss.run_gm_search(a_data, a_spec, search_prior(a_spec),

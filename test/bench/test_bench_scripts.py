@@ -93,6 +93,7 @@ def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
     lines = result.stdout.splitlines()
     assert any(ln.startswith("B ") and "phd_swarm" in ln and "GM-PHD" in ln for ln in lines)
     assert any(ln.startswith("A ") and "p_D at mean" in ln for ln in lines)
+    assert any(ln.startswith("A ") and "integrated p_D" in ln for ln in lines)
     data = json.loads(next(tmp_path.glob("estimators-*.json")).read_text())
     rows = {(r["scenario"], r["variant"]): r for r in data["results"]}
     assert {r["implementation"] for r in rows.values()} == {"phd_swarm"}
