@@ -120,14 +120,16 @@ def linear_gaussian_log_likelihood(H: np.ndarray, R: np.ndarray):
             raise ValueError(f"states must have shape (N, {d}), got {states.shape}")
         zw = z.reshape(-1, m) @ whiten                      # (M, m)
         ew = states @ (h.T @ whiten)                        # (N, m)
-        maha = np.zeros((zw.shape[0], ew.shape[0]))         # (M, N)
-        for c in range(m):        # over the m measurement coordinates: faster than einsum
-            y = zw[:, c, None] - ew[None, :, c]
-            y *= y
-            maha += y
-        maha *= -0.5
-        maha += log_norm
-        return maha
+        # |zw - ew|^2 = |zw|^2 + |ew|^2 - 2 zw.ew: one matrix product and two broadcast
+        # sums over the (M, N) array. Centred first, so that the cancellation costs
+        # about 1e-16 of (extent / sd)^2, 1e-11 for a 200 m field and 1 m noise.
+        centre = zw.mean(axis=0) if zw.shape[0] else np.zeros(m)
+        zw = zw - centre
+        ew = ew - centre
+        out = zw @ ew.T                                     # (M, N)
+        out += (log_norm - 0.5 * np.einsum("ij,ij->i", zw, zw))[:, None]
+        out -= 0.5 * np.einsum("ij,ij->i", ew, ew)[None, :]
+        return out
 
     return log_likelihood
 

@@ -380,24 +380,28 @@ def update(particles: ParticleSet, z: np.ndarray, log_likelihood: LogLikelihood,
     top[~explained] = 0.0
     log_num -= top[:, None]
     # exp underflows below about -708, and is several times slower there (subnormal
-    # results); terms below e^-700 of the row's largest are set to 0 instead.
-    negligible = log_num < _LOG_NEGLIGIBLE
+    # results); terms below e^-700 of the row's largest are raised to e^-700 instead
+    # (1e-304 of the largest: no sum or mean moves by a representable amount, and one pass
+    # over the array is saved against zeroing them).
     np.maximum(log_num, _LOG_NEGLIGIBLE, out=log_num)
-    shares = np.exp(log_num, out=log_num)          # p_D g w / e^top, (M, N), max 1 a row
-    shares[negligible] = 0.0
+    raw = np.exp(log_num, out=log_num)             # p_D g w / e^top, (M, N), max 1 a row
+    # One pass over the (M, N) array gives, per measurement, C(z) e^-top, the persistent
+    # part and the state sums; the shares s_i(z) = raw * factor(z) are never formed.
+    columns = np.empty((n, d + 2))
+    columns[:, :d] = particles.states
+    columns[:, d] = ~particles.newborn
+    columns[:, d + 1] = 1.0
+    row = raw @ columns                                          # (M, d + 2)
     with np.errstate(divide="ignore"):
-        log_c = np.log(shares.sum(axis=1)) + top                 # log C(z)
+        log_c = np.log(row[:, d + 1]) + top                      # log C(z)
     log_den = np.logaddexp(log_kappa, log_c)                     # log (kappa + C(z))
     # s_i(z) = (p_D g w / e^top) e^(top - log_den): the factor is <= 1 where some particle
     # explains z; rows nothing explains are zero (not 0 * inf when kappa = 0).
     with np.errstate(over="ignore", invalid="ignore"):
         factor = np.where(explained, np.exp(top - log_den), 0.0)
-    shares *= factor[:, None]                                    # s_i(z), (M, N)
-
-    w_post = w_missed + shares.sum(axis=0)
-    det_mass = shares.sum(axis=1)
-    persistent_mass = shares @ (~particles.newborn).astype(float)
-    sums = shares @ particles.states                             # (M, d)
+    w_post = w_missed + factor @ raw
+    row *= factor[:, None]
+    det_mass, persistent_mass, sums = row[:, d + 1], row[:, d], row[:, :d]
     means = np.divide(sums, det_mass[:, None], out=np.zeros_like(sums),
                       where=det_mass[:, None] > 0.0)
     return SmcUpdateResult(ParticleSet(w_post, particles.states, particles.newborn),
