@@ -33,6 +33,17 @@ def check_spd(name: str, a: np.ndarray) -> None:
         raise ValueError(f"{name} must be positive definite") from None
 
 
+def check_nonnegative(name: str, v: object) -> float:
+    """``v`` as a float, refused unless it is finite and >= 0."""
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {v!r}") from None
+    if not np.isfinite(x) or x < 0.0:
+        raise ValueError(f"{name} must be finite and >= 0, got {v!r}")
+    return x
+
+
 def check_positive_int(name: str, v: object, minimum: int = 1) -> int:
     """``v`` as an int, refused unless it is an integer (not a bool) >= ``minimum``."""
     if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < minimum:

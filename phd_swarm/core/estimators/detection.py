@@ -385,8 +385,39 @@ def _points(points) -> np.ndarray:
     return p
 
 
+class _FieldOfView:
+    """What the two FoV shapes share.
+
+    p_D of components (integrated or at the mean) and of points, from the shape's
+    ``_mass`` and ``_inside``.
+    """
+
+    p_inside: float
+    integrate: bool
+
+    def __call__(self, means, covs, sensor) -> np.ndarray:
+        """p_D of each component (J,) [-] for a scan from ``sensor`` (2,) [m]."""
+        sensor = _point("sensor", sensor)
+        if self.integrate:
+            return self.p_inside * self._mass(means, covs, sensor)
+        m, _, _, _ = _position_moments(means, covs)
+        return self.at_points(m, sensor)
+
+    def at_points(self, points, sensor) -> np.ndarray:
+        """p_D at positions ``points`` (N, 2) [m] for a scan from ``sensor`` (2,) [m]: (N,)."""
+        p = _points(points)
+        s = _point("sensor", sensor)
+        return np.where(self._inside(p, s), self.p_inside, 0.0)
+
+    def _mass(self, means, covs, sensor: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _inside(self, p: np.ndarray, s: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+
 @dataclass(frozen=True)
-class DiskFov:
+class DiskFov(_FieldOfView):
     """p_D of a sensor that sees a disk of radius ``radius`` around itself.
 
     Called as a :data:`.gm_phd.DetectionProbability`, ``p_d(means, covs, sensor)``: with
@@ -413,24 +444,15 @@ class DiskFov:
         object.__setattr__(self, "p_inside", _probability("p_inside", self.p_inside))
         object.__setattr__(self, "integrate", bool(self.integrate))
 
-    def __call__(self, means, covs, sensor) -> np.ndarray:
-        """p_D of each component (J,) [-] for a scan from ``sensor`` (2,) [m]."""
-        sensor = _point("sensor", sensor)
-        if self.integrate:
-            return self.p_inside * disk_mass(means, covs, sensor, self.radius)
-        m, _, _, _ = _position_moments(means, covs)
-        return self.at_points(m, sensor)
+    def _mass(self, means, covs, sensor: np.ndarray) -> np.ndarray:
+        return disk_mass(means, covs, sensor, self.radius)
 
-    def at_points(self, points, sensor) -> np.ndarray:
-        """p_D at positions ``points`` (N, 2) [m] for a scan from ``sensor`` (2,) [m]: (N,)."""
-        p = _points(points)
-        s = _point("sensor", sensor)
-        inside = np.hypot(p[:, 0] - s[0], p[:, 1] - s[1]) <= self.radius
-        return np.where(inside, self.p_inside, 0.0)
+    def _inside(self, p: np.ndarray, s: np.ndarray) -> np.ndarray:
+        return np.hypot(p[:, 0] - s[0], p[:, 1] - s[1]) <= self.radius
 
 
 @dataclass(frozen=True)
-class SquareFov:
+class SquareFov(_FieldOfView):
     """p_D of a sensor that sees an axis-aligned square of side ``side`` centred on itself.
 
     Papaioannou et al.'s sensing area (10 m x 10 m). Called as a
@@ -457,18 +479,9 @@ class SquareFov:
         object.__setattr__(self, "p_inside", _probability("p_inside", self.p_inside))
         object.__setattr__(self, "integrate", bool(self.integrate))
 
-    def __call__(self, means, covs, sensor) -> np.ndarray:
-        """p_D of each component (J,) [-] for a scan from ``sensor`` (2,) [m]."""
-        sensor = _point("sensor", sensor)
-        if self.integrate:
-            return self.p_inside * square_mass(means, covs, sensor, 0.5 * self.side)
-        m, _, _, _ = _position_moments(means, covs)
-        return self.at_points(m, sensor)
+    def _mass(self, means, covs, sensor: np.ndarray) -> np.ndarray:
+        return square_mass(means, covs, sensor, 0.5 * self.side)
 
-    def at_points(self, points, sensor) -> np.ndarray:
-        """p_D at positions ``points`` (N, 2) [m] for a scan from ``sensor`` (2,) [m]: (N,)."""
-        p = _points(points)
-        s = _point("sensor", sensor)
+    def _inside(self, p: np.ndarray, s: np.ndarray) -> np.ndarray:
         h = 0.5 * self.side
-        inside = (np.abs(p[:, 0] - s[0]) <= h) & (np.abs(p[:, 1] - s[1]) <= h)
-        return np.where(inside, self.p_inside, 0.0)
+        return (np.abs(p[:, 0] - s[0]) <= h) & (np.abs(p[:, 1] - s[1]) <= h)

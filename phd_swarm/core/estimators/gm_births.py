@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .checks import check_nonnegative
 from .gm_phd import GaussianMixture
 
 
@@ -94,11 +95,8 @@ class AdaptiveBirth:
     other_cov: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        nu = float(self.expected_births)
-        if not np.isfinite(nu) or nu < 0.0:
-            raise ValueError(f"expected_births must be finite and >= 0, got "
-                             f"{self.expected_births!r}")
-        object.__setattr__(self, "expected_births", nu)
+        object.__setattr__(self, "expected_births",
+                           check_nonnegative("expected_births", self.expected_births))
 
     def components(self, positions: np.ndarray, position_covs: np.ndarray,
                    associated: np.ndarray, dim: int) -> GaussianMixture:

@@ -16,7 +16,12 @@ import numpy as np
 
 from ..scan import Scan
 from .base import Estimator
-from .checks import check_generator, check_positive_int, check_probability
+from .checks import (
+    check_generator,
+    check_nonnegative,
+    check_positive_int,
+    check_probability,
+)
 from .smc_models import measurement_birth
 from .smc_phd import (
     BirthSampler,
@@ -52,11 +57,8 @@ class MeasurementBirth:
     n_per_measurement: int = 500
 
     def __post_init__(self) -> None:
-        nu = float(self.expected_births)
-        if not np.isfinite(nu) or nu < 0.0:
-            raise ValueError(f"expected_births must be finite and >= 0, got "
-                             f"{self.expected_births!r}")
-        object.__setattr__(self, "expected_births", nu)
+        object.__setattr__(self, "expected_births",
+                           check_nonnegative("expected_births", self.expected_births))
         if not callable(self.sample_state):
             raise ValueError("sample_state must be callable")
         object.__setattr__(self, "n_per_measurement",
