@@ -231,9 +231,30 @@ class _SMCPHDUpdater(SMCPHDUpdater):
         return self.last_log_weights
 
 
+class _ExactSMCPHDUpdater(_SMCPHDUpdater):
+    """``SMCPHDUpdater`` with the likelihood g(z | x) evaluated without noise.
+
+    Stone Soup 1.9.1 evaluates ``measurement_model.logpdf(detection, prediction,
+    noise=True)``, and ``noise=True`` makes the model's ``function`` add a fresh random
+    measurement-noise draw to every particle's predicted measurement: g(z | x) becomes
+    N(z; H x + v, R) with v ~ N(0, R), a randomly jittered and on average broadened
+    likelihood, not the one of Vo et al. (2005). This subclass evaluates N(z; H x, R).
+    """
+
+    def _get_measurement_loglikelihoods(self, prediction, detections):
+        g = np.zeros((prediction.state_vector.shape[1], len(detections)))
+        for i, detection in enumerate(detections):
+            model = self._check_measurement_model(detection.measurement_model)
+            g[:, i] = model.logpdf(detection, prediction, noise=False)
+        return g
+
+
 def run_smc_tracking(data, spec, particles: int, seed: int,
-                     birth_fraction: float = 0.1) -> dict:
+                     birth_fraction: float = 0.1, exact_likelihood: bool = False) -> dict:
     """Stone Soup's SMC-PHD on scenario B with a budget of ``particles`` particles.
+
+    ``exact_likelihood``: the updater evaluates g(z | x) without the random noise Stone
+    Soup 1.9.1 adds to it (:class:`_ExactSMCPHDUpdater`).
 
     Expansion births: ``birth_fraction * particles`` uniform particles per step carrying
     ``spec.birth_rate`` in all; resampled back to ``particles`` after each update.
@@ -257,7 +278,8 @@ def run_smc_tracking(data, spec, particles: int, seed: int,
         birth_sampler=ParticleSampler(distribution_func=sample, params={"num_samples": 1},
                                       ndim_state=4),
         birth_scheme="expansion")
-    updater = _SMCPHDUpdater(measurement_model=mm, prob_detect=spec.p_d,
+    updater_class = _ExactSMCPHDUpdater if exact_likelihood else _SMCPHDUpdater
+    updater = updater_class(measurement_model=mm, prob_detect=spec.p_d,
                              clutter_intensity=spec.clutter_intensity, num_samples=particles,
                              resampler=SystematicResampler())
     hypothesiser = SimpleHypothesiser(predictor=predictor)
