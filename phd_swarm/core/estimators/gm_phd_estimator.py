@@ -126,18 +126,31 @@ class GmPhdEstimator(Estimator):
     birth : AdaptiveBirth or PerMeasurementBirth, optional
         A measurement-driven birth rule (:mod:`.gm_births`), in addition to the model's
         fixed birth intensity; none by default.
+    fov_push : tuple of float, optional
+        (lower, upper): Sung & Tokekar's limited-FoV update rule (Alg. 1 lines 5-7,
+        eq. 11), off by default. The missed-detection term of a component whose p_D lies in
+        [lower, upper] (near the edge of the field of view) has its position pushed away
+        from the sensor y: ``mu <- mu + p_D (mu - y)``. The paper uses (0.4, 0.6).
     """
 
     def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
                  p_d: DetectionProbability | None = None,
                  measurement: MeasurementModel | None = None,
-                 birth: BirthRule = None) -> None:
+                 birth: BirthRule = None,
+                 fov_push: tuple[float, float] | None = None) -> None:
         if model.dim < 2:
             raise ValueError(f"GmPhdEstimator needs a state whose first two coordinates are "
                              f"the position, got d={model.dim}")
         self.model = model
         self.measurement = LinearMeasurement.of(model) if measurement is None else measurement
         self.birth = birth
+        if fov_push is not None:
+            lower, upper = (float(v) for v in fov_push)
+            if not 0.0 <= lower <= upper <= 1.0:
+                raise ValueError(f"fov_push must be (lower, upper) with 0 <= lower <= upper "
+                                 f"<= 1, got {fov_push!r}")
+            fov_push = (lower, upper)
+        self.fov_push = fov_push
         self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
         if self.mixture.dim != model.dim:
             raise ValueError(f"initial mixture has dimension {self.mixture.dim}, the model "
@@ -172,6 +185,8 @@ class GmPhdEstimator(Estimator):
             result = update_with_terms(mix, z, terms, p_d, self.measurement.clutter(z, sensor),
                                        missed=~newborn)
             posterior, shares = result.mixture, result.detection_weights
+        if self.fov_push is not None:
+            posterior = self._push_from_fov(posterior, p_d, sensor)
         self.mixture = prune_and_merge(posterior, self.model)
         self._newborn = np.zeros(len(self.mixture), dtype=bool)
         if self.birth is None or len(z) == 0:
@@ -187,6 +202,18 @@ class GmPhdEstimator(Estimator):
                 np.concatenate([self.mixture.means, new.means]),
                 np.concatenate([self.mixture.covs, new.covs]))
             self._newborn = np.zeros(len(self.mixture), dtype=bool)
+
+    def _push_from_fov(self, posterior: GaussianMixture, p_d: np.ndarray,
+                       sensor: np.ndarray) -> GaussianMixture:
+        """Sung & Tokekar eq. 11 on the missed-detection terms (the first J components)."""
+        lower, upper = self.fov_push
+        edge = (p_d >= lower) & (p_d <= upper)
+        if not edge.any():
+            return posterior
+        means = posterior.means.copy()
+        missed = means[:len(p_d)]
+        missed[edge, :2] += p_d[edge, None] * (missed[edge, :2] - sensor)
+        return GaussianMixture(posterior.weights, means, posterior.covs)
 
     def estimates(self) -> np.ndarray:
         """Estimated target positions (N, 2) [m]: the first two coordinates (Table III)."""

@@ -166,3 +166,30 @@ def test_range_bearing_estimator_finds_and_tracks_from_measurement_births(method
     found = est.estimates()
     d = np.linalg.norm(found[:, None] - targets[None], axis=-1)
     assert len(found) == 2 and d.min(axis=0).max() < 1.2
+
+
+def test_limited_fov_rule_pushes_edge_components_away_on_a_miss():
+    """Sung & Tokekar Alg. 1 lines 5-7, eq. 11, on a miss.
+
+    mu <- mu + p_D (mu - y) for the missed-detection term of a component whose p_D lies
+    between the thresholds; the others keep their means.
+    """
+    from phd_swarm.core.estimators.detection import DiskFov
+
+    sensor = np.array([0.0, 0.0])
+    means = np.array([[25.0, 0.0], [5.0, 0.0], [60.0, 0.0]])   # edge, inside, outside
+    mix = GaussianMixture(np.ones(3), means, np.broadcast_to(np.eye(2), (3, 2, 2)).copy())
+    fov = DiskFov(radius=25.0, p_inside=0.98)
+    p_d = fov(means, mix.covs, sensor)
+    assert 0.4 <= p_d[0] <= 0.6 and p_d[1] > 0.6 and p_d[2] < 0.4
+    est = GmPhdEstimator(_static_model(prune_threshold=1e-9, merge_threshold=0.0), mix,
+                         p_d=fov, fov_push=(0.4, 0.6))
+    est.update(_scan(0, np.empty((0, 2)), sensor))
+    out = est.mixture.means[np.argsort(est.mixture.means[:, 0])]
+    np.testing.assert_allclose(out, [[5.0, 0.0], [25.0 + 25.0 * p_d[0], 0.0], [60.0, 0.0]])
+    off = GmPhdEstimator(_static_model(prune_threshold=1e-9, merge_threshold=0.0), mix,
+                         p_d=fov)
+    off.update(_scan(0, np.empty((0, 2)), sensor))
+    np.testing.assert_allclose(np.sort(off.mixture.means[:, 0]), [5.0, 25.0, 60.0])
+    with pytest.raises(ValueError, match="fov_push must be"):
+        GmPhdEstimator(_static_model(), fov_push=(0.6, 0.4))
