@@ -1,0 +1,143 @@
+"""Track layer over extracted targets: persistent ids, tentative and confirmed tracks.
+
+Sung & Tokekar (Sec. V-F, "Layer 3") keep the trajectories of individual targets on top of
+the GM-PHD's extracted targets (Layer 2), track-to-estimate:
+
+- a track is its id and the history of the states associated with it (its life length l is
+  the number of associations);
+- a target (an extracted state with its covariance) is associated with the track whose
+  last state lies within the gate, the Mahalanobis threshold of the merging step,
+  ``(t - x)^T P^-1 (t - x) <= gate`` with P the target's covariance (as in Vo & Ma's merge,
+  a squared distance);
+- a new track, with a new id, is started for a target that no track gates, and for every
+  target but the nearest when several targets gate the same track (the paper: "if more
+  than one target is associated with an existing track");
+- a track is *tentative* while l < ``confirm_after`` (l_threshold, 3 in the paper) and
+  *confirmed* from then on. A track that gets no target keeps its history: the paper does
+  not end tracks, and a searched-for target out of view is still there.
+
+Each target goes to its nearest gating track; ties go to the older track (lower id). The
+distances are one (targets x tracks) array; only the few conflicting targets are visited
+one by one.
+
+Reference: Y. Sung and P. Tokekar, "GM-PHD filter for searching and tracking an unknown
+number of targets with a mobile sensor with limited FOV", IEEE T-ASE, 2022, Sec. V-F.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .estimators.checks import check_finite, check_positive_int, check_spd
+
+
+@dataclass
+class Track:
+    """One target's trajectory.
+
+    Attributes
+    ----------
+    track_id : int
+        Persistent id, never reused.
+    steps : list of int
+        Steps at which a target was associated with the track.
+    states : list of np.ndarray
+        The associated states, shape (d,) each, in the units of the state.
+    """
+
+    track_id: int
+    steps: list[int] = field(default_factory=list)
+    states: list[np.ndarray] = field(default_factory=list)
+
+    @property
+    def life(self) -> int:
+        """Life length l: the number of associations."""
+        return len(self.states)
+
+    @property
+    def last(self) -> np.ndarray:
+        """The latest associated state (d,)."""
+        return self.states[-1]
+
+
+class TrackLayer:
+    """Tracks kept from the targets extracted each step (Sung & Tokekar Sec. V-F).
+
+    Parameters
+    ----------
+    gate : float
+        Squared Mahalanobis threshold of an association (the merging threshold U), > 0.
+    confirm_after : int
+        l_threshold: a track is confirmed once its life length reaches it (3 in the paper).
+    """
+
+    def __init__(self, gate: float, confirm_after: int = 3) -> None:
+        gate = float(gate)
+        if not np.isfinite(gate) or gate <= 0.0:
+            raise ValueError(f"gate must be finite and > 0, got {gate!r}")
+        self.gate = gate
+        self.confirm_after = check_positive_int("confirm_after", confirm_after)
+        self.tracks: list[Track] = []
+        self._next_id = 0
+
+    def confirmed(self) -> list[Track]:
+        """The tracks whose life length has reached ``confirm_after``."""
+        return [t for t in self.tracks if t.life >= self.confirm_after]
+
+    def tentative(self) -> list[Track]:
+        """The tracks not confirmed yet."""
+        return [t for t in self.tracks if t.life < self.confirm_after]
+
+    def update(self, step: int, states: np.ndarray, covs: np.ndarray) -> np.ndarray:
+        """Associate this step's targets with the tracks; returns each target's track id.
+
+        Parameters
+        ----------
+        step : int
+            The step of the targets.
+        states : np.ndarray, shape (N, d)
+            Extracted target states (e.g. the means of the GM-PHD components above the
+            extraction threshold).
+        covs : np.ndarray, shape (N, d, d)
+            Their covariances, SPD (the components' covariances).
+
+        Returns
+        -------
+        np.ndarray of int, shape (N,)
+            The id of the track each target now belongs to.
+        """
+        states = np.asarray(states, dtype=float)
+        covs = np.asarray(covs, dtype=float)
+        if states.ndim != 2 or covs.shape != (states.shape[0], states.shape[1],
+                                               states.shape[1]):
+            raise ValueError(f"states must be (N, d) and covs (N, d, d), got {states.shape} "
+                             f"and {covs.shape}")
+        check_finite("states", states)
+        n = states.shape[0]
+        ids = np.full(n, -1)
+        if n == 0:
+            return ids
+        check_spd("covs", covs)
+        if self.tracks:
+            last = np.stack([t.last for t in self.tracks])               # (T, d)
+            diff = last[None, :, :] - states[:, None, :]                  # (N, T, d)
+            dist = np.einsum("ntd,nde,nte->nt", diff, np.linalg.inv(covs), diff)
+            nearest = np.argmin(dist, axis=1)                              # ties: older
+            gated = dist[np.arange(n), nearest] <= self.gate
+            # Several targets on one track: the nearest keeps it, the rest start tracks.
+            order = np.lexsort((dist[np.arange(n), nearest], nearest))
+            taken = np.zeros(len(self.tracks), dtype=bool)
+            for i in order[gated[order]]:
+                if not taken[nearest[i]]:
+                    taken[nearest[i]] = True
+                    ids[i] = self.tracks[nearest[i]].track_id
+                    self.tracks[nearest[i]].steps.append(int(step))
+                    self.tracks[nearest[i]].states.append(states[i].copy())
+        for i in np.flatnonzero(ids < 0):
+            track = Track(self._next_id, [int(step)], [states[i].copy()])
+            self._next_id += 1
+            self.tracks.append(track)
+            ids[i] = track.track_id
+        return ids
