@@ -394,6 +394,13 @@ class _FieldOfView:
 
     p_inside: float
     integrate: bool
+    #: The name of the shape's size field (finite, > 0).
+    _size: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, self._size, _positive(self._size, getattr(self, self._size)))
+        object.__setattr__(self, "p_inside", _probability("p_inside", self.p_inside))
+        object.__setattr__(self, "integrate", bool(self.integrate))
 
     def __call__(self, means, covs, sensor) -> np.ndarray:
         """p_D of each component (J,) [-] for a scan from ``sensor`` (2,) [m]."""
@@ -438,11 +445,7 @@ class DiskFov(_FieldOfView):
     radius: float
     p_inside: float
     integrate: bool = True
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _positive("radius", self.radius))
-        object.__setattr__(self, "p_inside", _probability("p_inside", self.p_inside))
-        object.__setattr__(self, "integrate", bool(self.integrate))
+    _size = "radius"
 
     def _mass(self, means, covs, sensor: np.ndarray) -> np.ndarray:
         return disk_mass(means, covs, sensor, self.radius)
@@ -473,11 +476,7 @@ class SquareFov(_FieldOfView):
     side: float
     p_inside: float
     integrate: bool = True
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "side", _positive("side", self.side))
-        object.__setattr__(self, "p_inside", _probability("p_inside", self.p_inside))
-        object.__setattr__(self, "integrate", bool(self.integrate))
+    _size = "side"
 
     def _mass(self, means, covs, sensor: np.ndarray) -> np.ndarray:
         return square_mass(means, covs, sensor, 0.5 * self.side)
