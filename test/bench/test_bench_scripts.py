@@ -76,8 +76,10 @@ def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path)
         assert r["steps"] == 20 and r["step_messages_missing"] == 0
         assert r["step_messages_recorded"] == r["step_messages_expected"] > 0
         assert r["recorder_ms_per_message"] > 0 and r["startup_s"] is not None
-    # The protocol traffic is most of what a run sends.
-    assert runs[1]["recorder_messages"] > 2 * runs[0]["recorder_messages"]
+    # Recording the inboxes adds the protocol traffic to the log. (How much it adds depends
+    # on how the robots spread, which is the benchmark's figure, not a bound to test: with 4
+    # crowded robots over 20 steps it is about as much again as the step messages.)
+    assert runs[1]["recorder_messages"] > runs[0]["recorder_messages"]
     (stop,) = data["results"]["interrupts"]
     assert stop["exit_code"] == 130 and stop["processes_left"] == 0
     assert "| ms / msg |" in result.stdout
