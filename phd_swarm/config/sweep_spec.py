@@ -270,9 +270,17 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
     """
     fields = dataclasses.asdict(scenario)
     fields.pop("system")
+    # Fields added after results were committed enter only where they matter, so the
+    # hashes of those results stay valid.
+    if scenario.targets.kind != "turning_walk":
+        fields["targets"].pop("turn_every")
     doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
-    if scenario.system != SystemConfig().with_parts(**method_system(controller)):
+    try:
+        implied = SystemConfig().with_parts(**method_system(controller))
+    except ValueError:  # the method's parts do not fit the default system's others
+        implied = None
+    if scenario.system != implied:
         doc["system"] = _plain(scenario.system.to_dict())
     text = json.dumps(doc, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -331,7 +339,7 @@ def find_spec(name_or_path: str) -> Path:
 # Each check takes (value, key path) and returns the value parsed or raises ValueError
 # naming the key path; load_spec puts the file in front.
 
-def _methods(value: Any, path: str) -> dict[str, str]:
+def _methods(value: Any, path: str, base: SystemConfig | None = None) -> dict[str, str]:
     """Label -> method text (:func:`controller_name`), each checked against the registry.
 
     A method is a controller name (``phd``) or a system block (``{controller: chen_o,
@@ -363,7 +371,19 @@ def _methods(value: Any, path: str) -> dict[str, str]:
             raise ValueError(f"{name}: expected a controller or a system block, got "
                              f"{method!r}")
         try:
-            system = SystemConfig.from_dict(block, "system")
+            if base is None or base == SystemConfig():
+                system = SystemConfig.from_dict(block, "system")
+            else:
+                # The preset's other parts: the method's block replaces only what it names,
+                # and its options are checked against the parts it ends up with.
+                roles = {r: block[r] for r in ROLES if r in block}
+                expect_mapping(block, "system", allowed=(*ROLES, "options"))
+                parts = base.with_parts(**roles)
+                given = expect_mapping(block.get("options") or {}, "system.options")
+                system = SystemConfig(**{r: getattr(parts, r) for r in ROLES},
+                                      options=tuple({**dict(parts.options),
+                                                     **given}.items()),
+                                      plugins=parts.plugins)
         except ValueError as exc:
             sub, _, msg = str(exc).removeprefix("system.").partition(": ")
             if legacy:
@@ -454,9 +474,16 @@ def _option_value(text: str) -> Any:
     return {"True": True, "False": False}.get(text, text)
 
 
-def _form(doc: Mapping[str, Any], prefix: str) -> dict[str, Any]:
-    """The overridable keys present in ``doc``, checked and parsed."""
-    return {k: _CHECKS[k](v, f"{prefix}{k}") for k, v in doc.items() if k in _CHECKS}
+def _form(doc: Mapping[str, Any], prefix: str, preset: str | None = None) -> dict[str, Any]:
+    """The overridable keys present in ``doc``, checked and parsed.
+
+    Methods are checked against the system of ``preset``: a method names the parts it
+    changes, the preset's others stay (Dames' system when no preset is given).
+    """
+    base = PRESETS[preset]().system if preset is not None else SystemConfig()
+    return {k: (_methods(v, f"{prefix}{k}", base) if k == "methods"
+                else _CHECKS[k](v, f"{prefix}{k}"))
+            for k, v in doc.items() if k in _CHECKS}
 
 
 def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) -> SweepSpec:
@@ -497,14 +524,14 @@ def _load(path: Path, doc: Any, quick: bool, engine: str | None) -> SweepSpec:
     if not _LABEL.match(name):
         raise ValueError("name: must be letters, digits and underscores")
     _load_spec_plugins(doc, path.parent)
-    full = _form(doc, "")
+    full = _form(doc, "", preset)
     for key in ("methods", "robots", "trials"):
         if key not in full:
             raise ValueError(f"{key}: missing")
     form = dict(full)
     qkeys: set[str] = set()
     if "quick" in doc:
-        qform = _form(expect_mapping(doc["quick"], "quick", OVERRIDABLE), "quick.")
+        qform = _form(expect_mapping(doc["quick"], "quick", OVERRIDABLE), "quick.", preset)
         if quick:
             if "scenario" in qform:
                 qform["scenario"] = {**form.get("scenario", {}), **qform["scenario"]}

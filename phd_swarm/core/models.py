@@ -235,3 +235,14 @@ def chen_clustered() -> PhdModels:
     """Chen, Dames & Park (2021) Sec. 4: Gaussian walk sd 0.35 m, p_s = 1, no birth."""
     return PhdModels(motion=RandomWalkMotion(sd=0.35, truncation=4 * 0.35))
 
+
+
+def sung_tokekar() -> PhdModels:
+    """Sung & Tokekar (2022) Sec. VI-A: disk FoV of radius 25 m, p(D|F) = 0.98.
+
+    The measurement noise is not stated; we take R = 1 m^2 I (docs/decisions.md). False
+    positives are the sensor's own (one per step with a probability, not a Poisson density:
+    :mod:`phd_swarm.core.sensors.disk_false_positive`); the grid models are unused.
+    """
+    return PhdModels(detection=DiskDetection(p_d=0.98, radius=25.0),
+                     measurement=GaussianMeasurement(variance=1.0))

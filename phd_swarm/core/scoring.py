@@ -76,6 +76,22 @@ def score_step(grid: Grid, image: np.ndarray, truth: np.ndarray,
                      expected_cardinality=float(expected_cardinality(image)))
 
 
+def score_estimates(estimates: np.ndarray, expected: float, truth: np.ndarray, c: float,
+                    p: float) -> StepScore:
+    """Score a team's own target estimates (K, 2) [m] and expected count against ``truth``.
+
+    For estimators that extract their own estimates (a Gaussian mixture's components
+    above a weight, Vo & Ma Table III) instead of a grid image.
+    """
+    estimates = np.asarray(estimates, dtype=float).reshape(-1, 2)
+    parts = ospa_components(truth, estimates, c, p)
+    return StepScore(estimates=estimates, ospa=float(parts.distance),
+                     ospa_localisation=float(parts.localisation),
+                     ospa_cardinality=float(parts.cardinality),
+                     cardinality_true=int(len(truth)), cardinality_est=int(len(estimates)),
+                     expected_cardinality=float(expected))
+
+
 def series_summary(rows: list[dict]) -> dict[str, object]:
     """Summary figures of a run's per-step rows (``t`` and the :meth:`StepScore.row` keys).
 

@@ -188,6 +188,10 @@ class CentralEngine:
         """Protocol counters: none (there is no protocol), for the engines' one interface."""
         return {}
 
+    def figures(self, truth: np.ndarray) -> dict[str, float]:
+        """No system-specific figures: the central form is the grid PHD's."""
+        return {}
+
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx)."""
         return np.array(self.filter.weights)

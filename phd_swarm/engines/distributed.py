@@ -359,6 +359,29 @@ class DistributedEngine:
         return receivers
 
     # -------------------------------------------------------------- observation
+    def team_estimates(self) -> tuple[np.ndarray, float]:
+        """The live robots' own estimates, stacked (K, 2) [m], and their expected counts summed.
+
+        The team's estimate for systems whose estimator runs in the agent (a grid PHD
+        distributed over cells is read with :meth:`team_weights` instead).
+        """
+        estimators = [self.agents[rid].estimator for rid in self.live_ids()]
+        points = [np.asarray(e.estimates(), dtype=float).reshape(-1, 2) for e in estimators]
+        return (np.concatenate(points) if points else np.empty((0, 2)),
+                float(sum(e.expected_count() for e in estimators)))
+
+    def figures(self, truth: np.ndarray) -> dict[str, float]:
+        """The system's own per-step figures (its estimator's ``figures`` hook), or none.
+
+        E.g. Sung & Tokekar's counts of components and tracks and Mahalanobis distances
+        (:mod:`phd_swarm.core.estimators.sung_figures`).
+        """
+        hook = self.team.parts["estimator"].extras.get("figures")
+        if hook is None:
+            return {}
+        estimators = [self.agents[rid].estimator for rid in self.live_ids()]
+        return hook(estimators, truth, self.scenario.ospa_c, self.scenario.ospa_p)
+
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx): the union of the live robots' bins."""
         img = np.zeros(self.grid.size)

@@ -18,6 +18,8 @@ from functools import cached_property, partial
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
@@ -39,7 +41,7 @@ EXTRACTION_WINDOW_M = 3.0
 
 Box = tuple[float, float, float, float]
 
-TARGET_KINDS = ("static", "dames_walk", "clustered_walk")
+TARGET_KINDS = ("static", "dames_walk", "clustered_walk", "turning_walk")
 
 #: The Dames and Chen map: a 100 x 100 m open square.
 MAP_100 = Environment(0.0, 0.0, 100.0, 100.0)
@@ -65,17 +67,17 @@ class TargetConfig:
 
     Attributes
     ----------
-    kind : {"static", "dames_walk", "clustered_walk"}
+    kind : {"static", "dames_walk", "clustered_walk", "turning_walk"}
         ``static``: Dames Sec. IV-A; ``dames_walk``: Dames Sec. IV-B; ``clustered_walk``:
-        Chen Sec. 4.
+        Chen Sec. 4; ``turning_walk``: Sung & Tokekar Sec. VI-A.4.
     count : int
         Targets drawn (``static``: before those outside E are discarded), the initial number
         (``dames_walk``), or the total ``sum(per_cluster)`` (``clustered_walk``).
     draw_box : (xmin, ymin, xmax, ymax) or None
         ``static``: the square targets are drawn from [m] (Dames: 120 x 120 m centred on
-        the map).
+        the map); ``turning_walk``: where they start (default: E).
     speed : float
-        ``dames_walk``: forward speed [m/s] (Dames: 1).
+        ``dames_walk`` and ``turning_walk``: forward speed [m/s] (Dames: 1; Sung: 0.05).
     heading_sd : float
         ``dames_walk``: s.d. of each heading change [rad] (Dames: 0.1).
     heading_rate : float
@@ -100,6 +102,8 @@ class TargetConfig:
         :class:`~phd_swarm.sim.targets.ClusteredWalkers`).
     max_speed : float
         ``clustered_walk``: speed cap [m/s] (Chen: 3).
+    turn_every : float
+        ``turning_walk``: seconds between two random headings [s] (Sung: 400 steps of 1 s).
     """
 
     kind: str
@@ -114,6 +118,7 @@ class TargetConfig:
     per_cluster: tuple[int, ...] = ()
     step_sd: float = 1.0
     max_speed: float = 3.0
+    turn_every: float = 400.0
 
     def __post_init__(self) -> None:
         expect_str(self.kind, "targets.kind", choices=TARGET_KINDS)
@@ -129,6 +134,7 @@ class TargetConfig:
         expect_str(self.birth_heading, "targets.birth_heading", choices=BIRTH_HEADINGS)
         expect_number(self.step_sd, "targets.step_sd", low=0.0)
         expect_number(self.max_speed, "targets.max_speed", low=0.0)
+        expect_number(self.turn_every, "targets.turn_every", low=0.0, strict=True)
         clusters = _boxes(self.clusters, "targets.clusters")
         object.__setattr__(self, "clusters", clusters)
         per = _counts(self.per_cluster, "targets.per_cluster")
@@ -263,6 +269,21 @@ class Scenario:
         return ExtractionConfig(threshold_per_m2=float(self.extraction_threshold),
                                 neighbourhood_m=EXTRACTION_WINDOW_M)
 
+    def initial_truth(self) -> tuple[np.ndarray, np.ndarray]:
+        """The true targets at step 0 (ids (N,), positions (N, 2) [m]), as the world draws them.
+
+        The same draw as :class:`phd_swarm.sim.world.World` built from this scenario (the
+        targets' own stream, child 1 of the seed). A system whose prior comes from an
+        "external source" that knows roughly where the targets are (Sung & Tokekar
+        Sec. V-A and VI-A) builds it from this, in its part's set-up.
+        """
+        from phd_swarm.sim.targets import make_targets
+        from phd_swarm.sim.world import STREAMS
+
+        child = np.random.SeedSequence(self.seed).spawn(len(STREAMS))[STREAMS.index("targets")]
+        targets = make_targets(np.random.default_rng(child), self)
+        return targets.ids.copy(), targets.positions.copy()
+
     def with_overrides(self, **changes: Any) -> Scenario:
         """A copy with some fields replaced (``dataclasses.replace``), validated again."""
         return dataclasses.replace(self, **changes)
@@ -326,9 +347,37 @@ def chen_clustered(robots: int = 70, resolution: float = 0.1) -> Scenario:
                              per_cluster=(30, 30), step_sd=1.0, max_speed=3.0))
 
 
+#: Sung & Tokekar's map: a 150 x 150 m open square (Fig. 6).
+MAP_150 = Environment(0.0, 0.0, 150.0, 150.0)
+
+#: Sung & Tokekar's system: disk FoV with one false positive per step at most, GM-PHD with
+#: the limited-FoV rule and a track layer, no exchange (one robot), the lawn-mower.
+SUNG_SYSTEM = {"sensor": "disk_false_positive", "estimator": "sung_gmphd",
+               "exchange": "none", "controller": "lawnmower"}
+
+
+def sung_tokekar(targets: int = 10) -> Scenario:
+    """Sung & Tokekar (2022) Sec. VI-A: one robot, 10 stationary targets, 7,278 s.
+
+    150 x 150 m map, robot at 0.5 m/s with a disk FoV of radius 25 m (Fig. 6 caption);
+    one step per second (the caption's 7,278 time steps for three lawn-mower sweeps at
+    0.5 m/s fit dt = 1 s, docs/decisions.md). The robot starts at the lawn-mower's start,
+    the lower-left corner. Targets uniform over the map (their positions are not given).
+    OSPA with p = 2 and c = 100 m (Sec. VI-A.3). The system's parts and their options
+    (false-positive probability, initial belief, thresholds) are in ``system``.
+    """
+    return Scenario(
+        name="sung_tokekar", env=MAP_150, resolution=1.0,
+        models=core_models.sung_tokekar(), dt=1.0, duration=7278.0, robots=1,
+        robot_start_box=(0.0, 0.0, 1e-6, 1e-6), robot_max_speed=0.5,
+        targets=TargetConfig(kind="static", count=targets, draw_box=(0.0, 0.0, 150.0, 150.0),
+                             speed=0.05, turn_every=400.0),
+        ospa_c=100.0, ospa_p=2.0, system=SystemConfig(**SUNG_SYSTEM))
+
+
 PRESETS: dict[str, Callable[[], Scenario]] = {
     "dames_static": dames_static, "dames_moving": dames_moving,
-    "chen_clustered": chen_clustered}
+    "chen_clustered": chen_clustered, "sung_tokekar": sung_tokekar}
 
 
 # Value parsers of scenario_from_dict: (value, key path) -> the field's value, converted (a
@@ -337,7 +386,7 @@ _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "kind": expect_str, "count": expect_int, "draw_box": expect_box, "speed": expect_number,
     "heading_sd": expect_number, "heading_rate": expect_number, "birth": expect_bool,
     "birth_heading": expect_str, "clusters": _boxes, "per_cluster": _counts,
-    "step_sd": expect_number, "max_speed": expect_number}
+    "step_sd": expect_number, "max_speed": expect_number, "turn_every": expect_number}
 
 _SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "name": expect_str, "resolution": expect_number, "dt": expect_number,
@@ -444,6 +493,6 @@ def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
         raise ValueError(f"{where}: {exc}") from None
 
 
-__all__ = ["BOTTOM_CENTRE_BOX", "MAP_100", "PRESETS", "TARGET_KINDS", "Scenario",
+__all__ = ["BOTTOM_CENTRE_BOX", "MAP_100", "MAP_150", "PRESETS", "TARGET_KINDS", "Scenario",
            "TargetConfig", "chen_clustered", "dames_moving", "dames_static", "preset_name",
-           "scenario_from_dict"]
+           "scenario_from_dict", "sung_tokekar"]

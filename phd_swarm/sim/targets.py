@@ -1,6 +1,6 @@
 """Ground-truth target populations of the simulated world, with stable integer ids.
 
-Three populations, one per experiment of the papers:
+Four populations, one per experiment of the papers:
 
 - :class:`StaticTargets`: Dames (2020) Sec. IV-A, targets drawn uniformly from a 120 x 120 m
   square around the map, those outside E discarded; they never move.
@@ -9,6 +9,8 @@ Three populations, one per experiment of the papers:
   E (true survival 1 until then) and births are drawn from the birth PHD of eq. 14.
 - :class:`ClusteredWalkers`: Chen, Dames & Park (2021) Sec. 4, a Gaussian random walk with
   a maximum speed of 3 m/s inside square sub-regions (clusters).
+- :class:`TurningWalkers`: Sung & Tokekar (2022) Sec. VI-A.4, straight lines at 0.05 m/s
+  with a new random heading every 400 s and at the boundary.
 
 Every population exposes ``positions`` ((N, 2) [m], read-only), ``ids`` ((N,) int64,
 read-only; an id is never reused, not even after its target has left) and
@@ -457,7 +459,118 @@ class ClusteredWalkers:
         self._positions = _frozen(reflect_into(moved, self._lo, self._hi))
 
 
-Targets = StaticTargets | DamesWalkers | ClusteredWalkers
+class TurningWalkers:
+    """Targets on straight lines that turn every so often (Sung & Tokekar Sec. VI-A.4).
+
+    "The targets are designed to move in a straight line and change their moving directions
+    randomly at every 400 time steps. The targets move at a speed of 0.05 m/s [...] If the
+    targets reach the environment boundary, then they pick a random direction that keeps
+    them within the environment." Every target moves at ``speed`` along its heading; every
+    ``turn_every`` seconds each takes a new heading uniform on [0, 2 pi); a target whose next
+    position would leave E instead takes a heading uniform over those that keep that step
+    inside (drawn by rejection from 16 uniform candidates; if none fits, it heads for the
+    centre of E). No births, no deaths.
+
+    Parameters
+    ----------
+    env : Environment
+        The map E.
+    positions : np.ndarray, shape (N, 2)
+        Initial positions [m], inside E.
+    headings : np.ndarray, shape (N,)
+        Initial headings [rad].
+    speed : float
+        Speed [m/s], >= 0.
+    turn_every : float
+        Seconds between two heading draws, > 0.
+    """
+
+    #: Candidate headings drawn per target at the boundary (rejection sampling).
+    CANDIDATES = 16
+
+    def __init__(self, env: Environment, positions: np.ndarray, headings: np.ndarray,
+                 speed: float, turn_every: float) -> None:
+        p = np.array(positions, dtype=float).reshape(-1, 2)
+        h = np.array(headings, dtype=float).reshape(-1)
+        if h.shape != (len(p),):
+            raise ValueError(f"headings must have shape ({len(p)},), got {h.shape}")
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(h))):
+            raise ValueError("positions and headings must be finite")
+        self._env = env
+        self._lo = np.array([env.xmin, env.ymin])
+        self._hi = np.array([env.xmax, env.ymax])
+        self._positions = _frozen(p)
+        self._headings = h
+        self._ids = _frozen(np.arange(len(p), dtype=np.int64))
+        self.speed = _check_nonneg("speed", speed)
+        self.turn_every = _check_nonneg("turn_every", turn_every, positive=True)
+        self._clock = 0.0
+
+    @classmethod
+    def sample(cls, rng: np.random.Generator, env: Environment, count: int,
+               draw_box: Sequence[float] | None, speed: float,
+               turn_every: float) -> TurningWalkers:
+        """``count`` targets uniform in ``draw_box`` (default E) with uniform headings.
+
+        ``rng`` is consumed as one ``random((count, 2))`` call (positions, the same draw as
+        :meth:`StaticTargets.sample` in a box inside E) then one ``random(count)`` call
+        (headings).
+        """
+        n = _check_count("count", count)
+        b = _check_box("draw_box", draw_box if draw_box is not None
+                       else (env.xmin, env.ymin, env.xmax, env.ymax))
+        p = b[:2] + rng.random((n, 2)) * (b[2:] - b[:2])
+        p = np.clip(p, [env.xmin, env.ymin], [env.xmax, env.ymax])
+        return cls(env, p, 2.0 * np.pi * rng.random(n), speed, turn_every)
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Target positions, shape (N, 2) [m], read-only."""
+        return self._positions
+
+    @property
+    def headings(self) -> np.ndarray:
+        """Headings, shape (N,) [rad] (a copy)."""
+        return self._headings.copy()
+
+    @property
+    def ids(self) -> np.ndarray:
+        """Target ids ``0..N-1``, shape (N,) int64, read-only."""
+        return self._ids
+
+    def step(self, rng: np.random.Generator, dt: float) -> None:
+        """Advance by ``dt`` seconds.
+
+        Order of draws: when a turn is due (the clock reaches a multiple of
+        ``turn_every``), one ``random(N)`` call for the new headings; then, if some targets
+        would leave E, one ``random((B, CANDIDATES))`` call for the B of them.
+        """
+        n = len(self._positions)
+        before = int(np.floor(self._clock / self.turn_every + 1e-9))
+        self._clock += dt
+        after = int(np.floor(self._clock / self.turn_every + 1e-9))
+        if after > before and n:
+            self._headings = 2.0 * np.pi * rng.random(n)
+        step = self.speed * dt
+        nxt = self._positions + step * np.stack([np.cos(self._headings),
+                                                 np.sin(self._headings)], axis=1)
+        out = np.flatnonzero(np.any((nxt < self._lo) | (nxt > self._hi), axis=1))
+        if out.size:
+            cand = 2.0 * np.pi * rng.random((out.size, self.CANDIDATES))
+            ends = (self._positions[out, None, :]
+                    + step * np.stack([np.cos(cand), np.sin(cand)], axis=2))
+            ok = np.all((ends >= self._lo) & (ends <= self._hi), axis=2)
+            centre = (self._lo + self._hi) / 2.0 - self._positions[out]
+            inward = np.arctan2(centre[:, 1], centre[:, 0])
+            first = np.argmax(ok, axis=1)
+            chosen = np.where(ok.any(axis=1), cand[np.arange(out.size), first], inward)
+            self._headings[out] = chosen
+            nxt[out] = self._positions[out] + step * np.stack([np.cos(chosen),
+                                                               np.sin(chosen)], axis=1)
+        self._positions = _frozen(np.clip(nxt, self._lo, self._hi))
+
+
+Targets = StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers
 
 
 def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
@@ -465,7 +578,8 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
 
     ``static`` -> :meth:`StaticTargets.sample`, ``dames_walk`` -> :meth:`DamesWalkers.sample`
     (with the filter's birth PHD ``scenario.models.birth`` when ``targets.birth``),
-    ``clustered_walk`` -> :meth:`ClusteredWalkers.sample`.
+    ``clustered_walk`` -> :meth:`ClusteredWalkers.sample`, ``turning_walk`` ->
+    :meth:`TurningWalkers.sample`.
     """
     cfg = scenario.targets
     if cfg.kind == "static":
@@ -478,4 +592,7 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     if cfg.kind == "clustered_walk":
         return ClusteredWalkers.sample(rng, cfg.clusters, cfg.per_cluster, cfg.step_sd,
                                        cfg.max_speed)
+    if cfg.kind == "turning_walk":
+        return TurningWalkers.sample(rng, scenario.env, cfg.count, cfg.draw_box, cfg.speed,
+                                     cfg.turn_every)
     raise ValueError(f"unknown target kind {cfg.kind!r}")

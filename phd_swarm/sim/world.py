@@ -30,7 +30,6 @@ from collections.abc import Mapping
 import numpy as np
 
 from phd_swarm.core.lloyd import next_position, step_length
-from phd_swarm.core.registry import lookup
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.targets import Targets, make_targets
 
@@ -76,6 +75,10 @@ class World:
         self._hi = np.array([scenario.env.xmax, scenario.env.ymax])
         self.targets: Targets = make_targets(self._target_rng, scenario)
         self.step_index = 0
+        sensor = scenario.system.parts()["sensor"]
+        self._simulate = sensor.extras["simulate"]
+        #: What the sensor part's set-up made of the scenario (``disk``: its models).
+        self._sensor_model = sensor.setup(scenario, scenario.system)
 
     @property
     def robot_positions(self) -> np.ndarray:
@@ -110,8 +113,8 @@ class World:
         """Measurement sets Z_r^k of the live robots at their current positions.
 
         Robots are visited in id order, each drawing from the sensor stream with
-        the ``simulate`` of the scenario's sensor (``disk``:
-        :func:`~phd_swarm.core.sensors.disk.simulate_scan`, Dames eq. 9-11 with
+        the ``simulate`` of the scenario's sensor, given what the sensor part's set-up made
+        (``disk``: :func:`~phd_swarm.core.sensors.disk.simulate_scan`, Dames eq. 9-11 with
         ``scenario.models``). Dead robots get no entry and consume no random numbers.
 
         Returns
@@ -120,9 +123,8 @@ class World:
             Robot id -> measurements, shape (M, 2) [m] (detections, then clutter).
         """
         x = self.targets.positions
-        models = self.scenario.models
-        simulate = lookup("sensor", self.scenario.system.sensor).extras["simulate"]
-        return {int(r): simulate(self._sensor_rng, models, self._positions[r], x)
+        simulate, model = self._simulate, self._sensor_model
+        return {int(r): simulate(self._sensor_rng, model, self._positions[r], x)
                 for r in np.flatnonzero(self._alive)}
 
     def apply_goals(self, goals: Mapping[int, np.ndarray]) -> None:

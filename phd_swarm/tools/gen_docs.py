@@ -89,8 +89,8 @@ DESCRIPTIONS: dict[str, str] = {
 
 #: Meaning and unit of every flattened scenario key (``scenario.<key>``), in display order.
 SCENARIO_MEANINGS: dict[str, str] = {
-    "preset": "Preset that the other keys override: dames_static, dames_moving or "
-              "chen_clustered.",
+    "preset": "Preset that the other keys override: dames_static, dames_moving, "
+              "chen_clustered or sung_tokekar.",
     "name": "Label of the run (default: the preset's name).",
     "env.xmin": "Map E: smallest x [m].",
     "env.ymin": "Map E: smallest y [m].",
@@ -122,12 +122,13 @@ SCENARIO_MEANINGS: dict[str, str] = {
                        "inside E.",
     "robot_max_speed": "Speed limit of the holonomic robots [m/s].",
     "targets.kind": "True population: static (Dames IV-A), dames_walk (Dames IV-B), "
-                    "clustered_walk (Chen Sec. 4).",
+                    "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4).",
     "targets.count": "static: targets drawn (those outside E are dropped); dames_walk: "
-                     "initial number; clustered_walk: sum of per_cluster.",
+                     "initial number; clustered_walk: sum of per_cluster; turning_walk: "
+                     "number.",
     "targets.draw_box": "static: the square targets are drawn from, (xmin, ymin, xmax, "
-                        "ymax) [m].",
-    "targets.speed": "dames_walk: forward speed [m/s].",
+                        "ymax) [m]; turning_walk: where they start.",
+    "targets.speed": "dames_walk: forward speed [m/s]; turning_walk: speed [m/s].",
     "targets.heading_sd": "dames_walk: s.d. of each heading change [rad].",
     "targets.heading_rate": "dames_walk: heading updates per second [Hz]; dt x "
                             "heading_rate must be whole.",
@@ -139,6 +140,7 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "targets.per_cluster": "clustered_walk: targets in each cluster.",
     "targets.step_sd": "clustered_walk: per-axis s.d. of the walk's velocity [m/s].",
     "targets.max_speed": "clustered_walk: speed cap [m/s].",
+    "targets.turn_every": "turning_walk: seconds between two random headings [s].",
     "extraction_threshold": "Target-extraction threshold as a density [targets/m^2]; the "
                             "per-bin threshold is this x resolution^2.",
     "ospa_c": "OSPA cut-off c [m].",
@@ -432,7 +434,8 @@ def render_parameters() -> str:
                                 "description"), rows))
 
     defaults = scenario_defaults()
-    keys = {k for flat in defaults.values() for k in flat}
+    # A preset's part options are listed with the parts (the options table below).
+    keys = {k for flat in defaults.values() for k in flat if not k.startswith("system.options.")}
     _missing("scenario keys", keys - set(SCENARIO_MEANINGS), "SCENARIO_MEANINGS")
     rows = []
     for key, meaning in SCENARIO_MEANINGS.items():

@@ -115,21 +115,29 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     series : dict of str to np.ndarray
         Per-step arrays (:data:`SERIES`), shape (steps,); ``t = k dt`` [s].
     """
-    from phd_swarm.core.scoring import score_step
+    from phd_swarm.core.scoring import score_estimates, score_step
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     sc = trial.scenario
     engine = make_engine(trial.engine, sc)
+    # A grid PHD is scored from the team's image; other estimators give their estimates.
+    grid = "grid_density" in sc.system.parts()["estimator"].provides
     n = sc.steps
     s = {name: np.zeros(n) for name in SERIES}
     for k in range(n):
         _, truth = engine.world.truth()
         engine.step()
-        score = score_step(sc.grid, engine.team_weights(), truth, sc.extraction, sc.ospa_c,
-                           sc.ospa_p)
+        if grid:
+            score = score_step(sc.grid, engine.team_weights(), truth, sc.extraction,
+                               sc.ospa_c, sc.ospa_p)
+        else:
+            score = score_estimates(*engine.team_estimates(), truth, sc.ospa_c, sc.ospa_p)
         s["t"][k] = k * sc.dt
         for name, value in score.row().items():
             s[name][k] = value
+        # The system's own figures (e.g. Sung & Tokekar's tracks), saved with the series.
+        for name, value in engine.figures(truth).items():
+            s.setdefault(name, np.full(n, np.nan))[k] = value
     ospa = s["ospa"]
     a, b = trial.window
     in_window = (s["t"] >= a - 1e-9) & (s["t"] <= b + 1e-9)

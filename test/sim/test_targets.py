@@ -300,3 +300,47 @@ def test_make_targets_without_birth():
     s = s.with_overrides(targets=s.targets.__class__(kind="dames_walk", count=5, birth=False))
     t = make_targets(np.random.default_rng(0), s)
     assert t.expected_births == 0.0
+
+
+# ------------------------------------------------------------------ turning walkers
+def _turning(n=50, speed=0.05, turn_every=400.0, seed=0):
+    from phd_swarm.core.grid import Environment
+    from phd_swarm.sim.targets import TurningWalkers
+    env = Environment(0.0, 0.0, 150.0, 150.0)
+    return env, TurningWalkers.sample(np.random.default_rng(seed), env, n, None, speed,
+                                      turn_every)
+
+
+def test_turning_walkers_go_straight_at_their_speed_between_turns():
+    _, t = _turning()
+    rng = np.random.default_rng(1)
+    for _ in range(399):
+        before, heading = t.positions.copy(), t.headings
+        t.step(rng, 1.0)
+        inside = np.all((before > 1.0) & (before < 149.0), axis=1)
+        step = t.positions - before
+        assert np.allclose(np.hypot(step[:, 0], step[:, 1]), 0.05)
+        # Away from the boundary the heading does not change before the 400th second.
+        assert np.array_equal(t.headings[inside], heading[inside])
+
+
+def test_turning_walkers_turn_every_turn_every_seconds():
+    _, t = _turning(speed=0.0)            # not moving: only the scheduled turns happen
+    rng = np.random.default_rng(2)
+    h0 = t.headings
+    for _ in range(399):
+        t.step(rng, 1.0)
+    assert np.array_equal(t.headings, h0)
+    t.step(rng, 1.0)
+    assert not np.any(t.headings == h0)
+
+
+def test_turning_walkers_stay_inside_and_are_reproducible():
+    env, a = _turning(n=30, speed=3.0)
+    _, b = _turning(n=30, speed=3.0)
+    ra, rb = np.random.default_rng(5), np.random.default_rng(5)
+    for _ in range(500):
+        a.step(ra, 1.0)
+        b.step(rb, 1.0)
+        assert np.all(env.contains(a.positions))
+    assert np.array_equal(a.positions, b.positions)

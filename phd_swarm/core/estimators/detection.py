@@ -190,6 +190,11 @@ def _disk_integral(ma, sa, mb, sb, radius):
     return np.bincount(comp[seg], weights=panel, minlength=j)
 
 
+#: Components whose mean lies more than this many major-axis sds outside (inside) the disk
+#: have mass < Phi(-10) = 7.6e-24 in (out of) it and are given 0 (1) without integrating.
+_FAR_SDS = 10.0
+
+
 def disk_mass(means, covs, centre, radius) -> np.ndarray:
     """Probability that X ~ N(m_j, P_j) (position block) lies in a disk, for each component.
 
@@ -229,7 +234,10 @@ def disk_mass(means, covs, centre, radius) -> np.ndarray:
     -------
     np.ndarray, shape (J,)
         Probability mass inside the disk [-], in [0, 1]; exactly 0 for components more
-        than 9 sd (along each principal axis) away from the disk.
+        than 9 sd (along each principal axis) away from the disk, and for those whose mean
+        is more than 10 major-axis sd outside it (true mass < 8e-24); exactly 1 for those
+        more than 10 major-axis sd inside it (error < 8e-24). Neither is integrated, which
+        saves most of the work when a few components of many are near the disk's edge.
     """
     m, a, b, c = _position_moments(means, covs)
     centre = _point("centre", centre)
@@ -240,13 +248,21 @@ def disk_mass(means, covs, centre, radius) -> np.ndarray:
     mu_minor = -sin_t * dx + cos_t * dy
     s_major = np.maximum(s_major, _SD_FLOOR)
     s_minor = np.maximum(s_minor, _SD_FLOOR)
+    dist = np.hypot(dx, dy)
+    # Far outside: mass < Phi(-10); deep inside: mass > 1 - Phi(-10). Neither is integrated.
+    p = np.where(radius - dist > _FAR_SDS * s_major, 1.0, 0.0)
+    near = np.abs(dist - radius) <= _FAR_SDS * s_major
+    if not near.any():
+        return p
+    mu_major, mu_minor, s_major, s_minor = (v[near] for v in (mu_major, mu_minor, s_major,
+                                                               s_minor))
     with np.errstate(over="ignore", divide="ignore", under="ignore"):
         minor_outer = (_sharpness(mu_minor, s_minor, mu_major, s_major, radius)
                        >= _sharpness(mu_major, s_major, mu_minor, s_minor, radius))
-        p = _disk_integral(np.where(minor_outer, mu_minor, mu_major),
-                           np.where(minor_outer, s_minor, s_major),
-                           np.where(minor_outer, mu_major, mu_minor),
-                           np.where(minor_outer, s_major, s_minor), radius)
+        p[near] = _disk_integral(np.where(minor_outer, mu_minor, mu_major),
+                                 np.where(minor_outer, s_minor, s_major),
+                                 np.where(minor_outer, mu_major, mu_minor),
+                                 np.where(minor_outer, s_major, s_minor), radius)
     return np.clip(p, 0.0, 1.0)
 
 

@@ -31,7 +31,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
 from .checks import check_finite, check_measurements, check_probability, check_spd
 
@@ -457,7 +456,7 @@ def update_with_terms(mix: GaussianMixture, z: np.ndarray, terms: KalmanTerms,
     with np.errstate(divide="ignore"):
         log_num = np.log(p_d * mix.weights)[None, :] + log_q                # (M, J)
         log_kappa = np.broadcast_to(np.log(np.asarray(clutter, dtype=float)), (n_meas,))
-    log_den = logsumexp(np.concatenate([log_kappa[:, None], log_num], axis=1), axis=1)
+    log_den = _logsumexp_rows(np.concatenate([log_kappa[:, None], log_num], axis=1))
     with np.errstate(invalid="ignore"):
         w_det = np.exp(log_num - log_den[:, None])
     w_det[~np.isfinite(log_den)] = 0.0
@@ -469,6 +468,23 @@ def update_with_terms(mix: GaussianMixture, z: np.ndarray, terms: KalmanTerms,
         np.concatenate([mix.means, means_det.reshape(-1, d)]),
         np.concatenate([mix.covs, np.tile(terms.covs, (n_meas, 1, 1))]))
     return UpdateResult(out, w_det)
+
+
+def _logsumexp_rows(a: np.ndarray) -> np.ndarray:
+    """Log-sum-exp of each row of ``a`` (M, K), shifted by the row's maximum.
+
+    -inf for a row of -inf. scipy's ``logsumexp`` does the same with several times the
+    overhead, which dominated a small update.
+    """
+    top = a.max(axis=1)
+    shift = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        return shift + np.log(np.exp(a - shift[:, None]).sum(axis=1))
+
+
+#: Up to this many components (after pruning) the merge distances of all pairs are
+#: computed at once, (J, J) of them; above it, one column per group (memory ~ J d^2).
+_PAIRWISE_MAX = 256
 
 
 def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
@@ -507,12 +523,26 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
     labels = np.full(n, -1)
     taken = np.zeros(n, dtype=bool)
     n_groups = 0
-    for j in np.argsort(-w, kind="stable"):
+    order = np.argsort(-w, kind="stable")
+    close = None
+    if n <= _PAIRWISE_MAX:
+        # All pairs at once, close[i, j] = (m_i - m_j)^T P_i^-1 (m_i - m_j) <= U; when no
+        # two components are close (most steps of a search, far from the sensor) every
+        # component is its own group, in weight order, and the loop is skipped.
+        diff = m[:, None, :] - m[None, :, :]
+        close = np.einsum("ijd,ide,ije->ij", diff, p_inv, diff) <= model.merge_threshold
+        if np.count_nonzero(close) == n:
+            labels[order] = np.arange(n)
+            order, n_groups = order[:0], n
+    for j in order:
         if taken[j]:
             continue
-        diff = m - m[j]
-        dist = np.einsum("ni,nik,nk->n", diff, p_inv, diff)
-        group = (dist <= model.merge_threshold) & ~taken
+        if close is None:
+            diff = m - m[j]
+            dist = np.einsum("ni,nik,nk->n", diff, p_inv, diff)
+            group = (dist <= model.merge_threshold) & ~taken
+        else:
+            group = close[:, j] & ~taken
         group[j] = True
         labels[group] = n_groups
         taken |= group

@@ -1,7 +1,8 @@
 """Exchanges: the built-in ones register on import (:mod:`phd_swarm.core.registry`).
 
 :mod:`.base` is the role (:class:`~.base.Exchange`, :class:`~.base.Envelope`); :mod:`.faults`
-injects lossy links into any exchange's traffic; :mod:`.voronoi_phd` is Dames' exchange.
+injects lossy links into any exchange's traffic; :mod:`.voronoi_phd` is Dames' exchange,
+:mod:`.none` the exchange of a robot alone.
 """
 
-from . import voronoi_phd  # noqa: F401  (registration)
+from . import none, voronoi_phd  # noqa: F401  (registration)

@@ -9,16 +9,20 @@ the GM-PHD's extracted targets (Layer 2), track-to-estimate:
   last state lies within the gate, the Mahalanobis threshold of the merging step,
   ``(t - x)^T P^-1 (t - x) <= gate`` with P the target's covariance (as in Vo & Ma's merge,
   a squared distance);
-- a new track, with a new id, is started for a target that no track gates, and for every
-  target but the nearest when several targets gate the same track (the paper: "if more
-  than one target is associated with an existing track");
+- each track takes at most one target per step and each target at most one track: the
+  gating (target, track) pairs are taken in increasing distance (ties: the older track),
+  a pair whose target or track is already taken is skipped. So when several targets gate
+  one track the nearest keeps it (the paper: new tracks "if more than one target is
+  associated with an existing track") and the others take their next gating track, or
+  start a new track, with a new id, as does a target that no track gates. The copies of
+  one heavy component (Vo & Ma Table III extracts round(w) targets at its mean) thus keep
+  the tracks they had, one each, instead of starting new ones every step;
 - a track is *tentative* while l < ``confirm_after`` (l_threshold, 3 in the paper) and
   *confirmed* from then on. A track that gets no target keeps its history: the paper does
   not end tracks, and a searched-for target out of view is still there.
 
-Each target goes to its nearest gating track; ties go to the older track (lower id). The
-distances are one (targets x tracks) array; only the few conflicting targets are visited
-one by one.
+The distances are one (targets x tracks) array, computed with the last states of the
+tracks kept in one array; only the gating pairs (a few per target) are visited one by one.
 
 Reference: Y. Sung and P. Tokekar, "GM-PHD filter for searching and tracking an unknown
 number of targets with a mobile sensor with limited FOV", IEEE T-ASE, 2022, Sec. V-F.
@@ -30,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .estimators.checks import check_finite, check_positive_int, check_spd
+from .checks import check_finite, check_positive_int, check_spd
 
 
 @dataclass
@@ -81,6 +85,9 @@ class TrackLayer:
         self.confirm_after = check_positive_int("confirm_after", confirm_after)
         self.tracks: list[Track] = []
         self._next_id = 0
+        #: Row i: the last state of ``tracks[i]``; grown by doubling, ``len(tracks)`` rows
+        #: used (tracks never end, so restacking them every step would grow with the run).
+        self._last = np.empty((0, 0))
 
     def confirmed(self) -> list[Track]:
         """The tracks whose life length has reached ``confirm_after``."""
@@ -121,23 +128,39 @@ class TrackLayer:
             return ids
         check_spd("covs", covs)
         if self.tracks:
-            last = np.stack([t.last for t in self.tracks])               # (T, d)
+            last = self._last[:len(self.tracks)]                          # (T, d)
             diff = last[None, :, :] - states[:, None, :]                  # (N, T, d)
-            dist = np.einsum("ntd,nde,nte->nt", diff, np.linalg.inv(covs), diff)
-            nearest = np.argmin(dist, axis=1)                              # ties: older
-            gated = dist[np.arange(n), nearest] <= self.gate
-            # Several targets on one track: the nearest keeps it, the rest start tracks.
-            order = np.lexsort((dist[np.arange(n), nearest], nearest))
-            taken = np.zeros(len(self.tracks), dtype=bool)
-            for i in order[gated[order]]:
-                if not taken[nearest[i]]:
-                    taken[nearest[i]] = True
-                    ids[i] = self.tracks[nearest[i]].track_id
-                    self.tracks[nearest[i]].steps.append(int(step))
-                    self.tracks[nearest[i]].states.append(states[i].copy())
-        for i in np.flatnonzero(ids < 0):
+            dist = np.sum((diff @ np.linalg.inv(covs)) * diff, axis=2)    # (N, T)
+            rows, cols = np.nonzero(dist <= self.gate)
+            order = np.lexsort((cols, dist[rows, cols]))                  # ties: older
+            taken = set()
+            for i, t in zip(rows[order].tolist(), cols[order].tolist(), strict=True):
+                if ids[i] >= 0 or t in taken:
+                    continue
+                taken.add(t)
+                ids[i] = self.tracks[t].track_id
+                self.tracks[t].steps.append(int(step))
+                self.tracks[t].states.append(states[i].copy())
+                self._last[t] = states[i]
+        new = np.flatnonzero(ids < 0)
+        if new.size:
+            self._reserve(len(self.tracks) + new.size, states.shape[1])
+        for i in new:
             track = Track(self._next_id, [int(step)], [states[i].copy()])
             self._next_id += 1
+            self._last[len(self.tracks)] = states[i]
             self.tracks.append(track)
             ids[i] = track.track_id
         return ids
+
+    def _reserve(self, rows: int, dim: int) -> None:
+        """Room for ``rows`` last states of dimension ``dim`` (capacity doubles)."""
+        if self._last.shape[1] != dim:
+            if self.tracks:
+                raise ValueError(f"states have dimension {dim}, the tracks "
+                                 f"{self._last.shape[1]}")
+            self._last = np.empty((0, dim))
+        if rows > self._last.shape[0]:
+            grown = np.empty((max(rows, 2 * self._last.shape[0], 16), dim))
+            grown[:len(self.tracks)] = self._last[:len(self.tracks)]
+            self._last = grown

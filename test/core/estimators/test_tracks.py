@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.tracks import TrackLayer
+from phd_swarm.core.estimators.tracks import TrackLayer
 
 
 def _covs(n: int, var: float = 1.0) -> np.ndarray:
@@ -75,3 +75,22 @@ def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="covs must be positive definite"):
         layer.update(0, np.zeros((1, 2)), np.zeros((1, 2, 2)))
     assert layer.update(0, np.empty((0, 2)), np.empty((0, 2, 2))).size == 0
+
+
+def test_copies_of_one_component_keep_their_own_tracks():
+    # A component of weight ~3 is extracted as three targets at one mean (Vo & Ma
+    # Table III): after the first step each copy keeps a track of its own.
+    layer = TrackLayer(gate=10.0)
+    first = layer.update(0, np.zeros((3, 2)), _covs(3))
+    for k in range(1, 5):
+        ids = layer.update(k, np.full((3, 2), 0.01 * k), _covs(3))
+        assert sorted(ids.tolist()) == sorted(first.tolist())
+    assert len(layer.tracks) == 3 and len(layer.confirmed()) == 3
+
+
+def test_a_target_displaced_by_a_nearer_one_takes_its_next_gating_track():
+    layer = TrackLayer(gate=10.0)
+    layer.update(0, np.array([[0.0, 0.0], [2.0, 0.0]]), _covs(2))
+    # Both targets are nearest to track 0; the nearer keeps it, the other takes track 1.
+    ids = layer.update(1, np.array([[0.2, 0.0], [0.9, 0.0]]), _covs(2))
+    assert ids.tolist() == [0, 1]
