@@ -114,3 +114,15 @@ def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
     for key in (("smc", "SMC-PHD"), ("B-rb", "GM-PHD EKF"), ("B-rb", "GM-PHD UKF"),
                 ("B-rb", "SMC-PHD")):
         assert rows[key]["ospa_last_half"] < 0.5 * rows[key]["ospa_c"], key
+
+
+def test_bench_sung_quick_times_a_trial_and_the_gp(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "sung", "--quick",
+                             "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(next(tmp_path.glob("sung-*.json")).read_text())
+    trials, gp = data["results"][:2], data["results"][2]
+    assert [t["steps"] for t in trials] == [600, 600]
+    assert all(t["engine_cpu_s"] > 0 and t["scoring_cpu_s"] > 0 for t in trials)
+    assert all(gp[f"{n} tracks"] > 0 for n in (1, 10, 50))

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import minimize
@@ -138,9 +139,12 @@ def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
     """GP posterior means of N tracks at one step each (Sung & Tokekar eq. 8), batched.
 
     Every track has the same number W of points (the caller groups tracks by length:
-    :func:`predict_tracks`); W is the length given, not ``hp.window``. One Cholesky factor
-    ``L L^T = K(K, K) + sigma_n^2 I`` per track, and eq. 8 as
-    ``(L^-1 K(K, k))^T (L^-1 M)``, all tracks and dimensions in one batched solve.
+    :func:`predict_tracks`); W is the length given, not ``hp.window``. Eq. 8 is
+    ``a^T (M - prior) + prior`` with ``a = [K(K, K) + sigma_n^2 I]^-1 K(K, k)``, which
+    depends only on the offsets ``k - K``: one Cholesky factor per distinct offset
+    pattern, cached across calls (a track associated at every step has the same pattern
+    at every step), so a step costs O(W d) per track once its pattern is known, O(W^3)
+    for a new pattern.
 
     Parameters
     ----------
@@ -179,15 +183,29 @@ def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
     else:
         prior = np.zeros((n, means.shape[2]))
     resid = means - prior[:, None, :]                                 # (N, W, d)
-    gram = _se(times[:, :, None] - times[:, None, :], hp.signal_sd, hp.length_scale)
-    gram[:, np.arange(w), np.arange(w)] += hp.noise_sd**2
-    chol = np.linalg.cholesky(gram)                                   # (N, W, W)
-    k_star = _se(k_next[:, None] - times, hp.signal_sd, hp.length_scale)  # (N, W)
-    # np.linalg.solve loops in C over the batch; scipy's batched solve_triangular loops in
-    # Python, which costs more than the extra flops of a general solve at W <= 50.
-    rhs = np.concatenate([k_star[:, :, None], resid], axis=2)       # (N, W, 1 + d)
-    z = np.linalg.solve(chol, rhs)
-    return prior + np.einsum("nw,nwd->nd", z[:, :, 0], z[:, :, 1:])
+    # Eq. 8 is linear in M: m = a^T (M - prior) + prior with a = [K(K,K) + s_n^2 I]^-1
+    # K(K, k), which depends only on the offsets k - K. A track seen at every step has
+    # the offsets W, ..., 1 at every step, so the distinct offset patterns are few: each
+    # is solved once and cached (:func:`_weights`).
+    offsets = np.ascontiguousarray(k_next[:, None] - times)           # (N, W)
+    weights = np.stack([_weights(row.tobytes(), w, hp) for row in offsets])
+    return prior + np.einsum("nw,nwd->nd", weights, resid)
+
+
+@lru_cache(maxsize=4096)
+def _weights(offsets: bytes, w: int, hp: GpHyperparameters) -> np.ndarray:
+    """``a = [K(K, K) + sigma_n^2 I]^-1 K(K, k)`` for the offsets ``k - K`` (bytes of W floats).
+
+    One Cholesky factor and two triangular solves; read-only (shared through the cache).
+    """
+    d = np.frombuffer(offsets, dtype=float, count=w)
+    gram = _se(d[:, None] - d[None, :], hp.signal_sd, hp.length_scale)
+    gram[np.arange(w), np.arange(w)] += hp.noise_sd**2
+    chol = np.linalg.cholesky(gram)
+    k_star = _se(d, hp.signal_sd, hp.length_scale)
+    a = np.linalg.solve(chol.T, np.linalg.solve(chol, k_star))
+    a.flags.writeable = False
+    return a
 
 
 def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
