@@ -259,6 +259,11 @@ class SweepSpec:
                 "engine": self.engine, "scenario": _plain(self.scenario)}
 
 
+#: Part options added after results that use their parts were committed, with the default
+#: that reproduces those results: at that default they do not enter the hash.
+_LATER_OPTIONS = {"fov_push_to": "paper"}
+
+
 def config_hash(scenario: Scenario, controller: str, metric: str,
                 window: tuple[float, float], engine: str = "central") -> str:
     """16 hex digits of SHA-256 over the scenario's fields, controller, metric and engine.
@@ -282,6 +287,9 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
         implied = None
     if scenario.system != implied:
         doc["system"] = _plain(scenario.system.to_dict())
+        for name, default in _LATER_OPTIONS.items():
+            if doc["system"]["options"].get(name, default) == default:
+                doc["system"]["options"].pop(name, None)
     text = json.dumps(doc, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -131,13 +131,20 @@ class GmPhdEstimator(Estimator):
         eq. 11), off by default. The missed-detection term of a component whose p_D lies in
         [lower, upper] (near the edge of the field of view) has its position pushed away
         from the sensor y: ``mu <- mu + p_D (mu - y)``. The paper uses (0.4, 0.6).
+    fov_push_to : {"paper", "threshold"}
+        How far eq. 11 pushes: as printed (``paper``: by p_D times the distance to the
+        sensor, ~12 m at the edge of a 25 m disk), or radially just far enough that the
+        component's p_D falls to ``lower`` (``threshold``: the rule's stated aim, "get
+        pushed outside the FOV", with the smallest move; found by bisection on the
+        distance, to 1e-6 of it).
     """
 
     def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
                  p_d: DetectionProbability | None = None,
                  measurement: MeasurementModel | None = None,
                  birth: BirthRule = None,
-                 fov_push: tuple[float, float] | None = None) -> None:
+                 fov_push: tuple[float, float] | None = None,
+                 fov_push_to: str = "paper") -> None:
         if model.dim < 2:
             raise ValueError(f"GmPhdEstimator needs a state whose first two coordinates are "
                              f"the position, got d={model.dim}")
@@ -151,6 +158,9 @@ class GmPhdEstimator(Estimator):
                                  f"<= 1, got {fov_push!r}")
             fov_push = (lower, upper)
         self.fov_push = fov_push
+        if fov_push_to not in ("paper", "threshold"):
+            raise ValueError(f"fov_push_to must be 'paper' or 'threshold', got {fov_push_to!r}")
+        self.fov_push_to = fov_push_to
         self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
         if self.mixture.dim != model.dim:
             raise ValueError(f"initial mixture has dimension {self.mixture.dim}, the model "
@@ -212,8 +222,47 @@ class GmPhdEstimator(Estimator):
             return posterior
         means = posterior.means.copy()
         missed = means[:len(p_d)]
-        missed[edge, :2] += p_d[edge, None] * (missed[edge, :2] - sensor)
+        if self.fov_push_to == "paper":
+            missed[edge, :2] += p_d[edge, None] * (missed[edge, :2] - sensor)
+        else:
+            missed[edge] = self._push_to_threshold(missed[edge], posterior.covs[:len(p_d)][edge],
+                                                   sensor, lower)
         return GaussianMixture(posterior.weights, means, posterior.covs)
+
+    def _push_to_threshold(self, means: np.ndarray, covs: np.ndarray, sensor: np.ndarray,
+                           lower: float) -> np.ndarray:
+        """Move each mean radially away from ``sensor`` until its p_D is ``lower``.
+
+        p_D decreases along the ray outward from the sensor once the mean is near the
+        edge; the distance t is bracketed by [0, hi] with hi doubled until p_D <= lower,
+        then bisected (60 halvings: to 1e-6 of hi or better).
+        """
+        out = means.copy()
+        ray = out[:, :2] - sensor
+        length = np.hypot(ray[:, 0], ray[:, 1])
+        unit = np.where(length[:, None] > 0, ray / np.maximum(length, 1e-300)[:, None],
+                        np.array([1.0, 0.0]))
+
+        def p_at(t: np.ndarray) -> np.ndarray:
+            moved = out.copy()
+            moved[:, :2] += t[:, None] * unit
+            return self._p_d(moved, covs, sensor)
+
+        lo = np.zeros(len(out))
+        hi = np.ones(len(out))
+        for _ in range(60):
+            above = p_at(hi) > lower
+            if not above.any():
+                break
+            lo = np.where(above, hi, lo)
+            hi = np.where(above, 2.0 * hi, hi)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            above = p_at(mid) > lower
+            lo = np.where(above, mid, lo)
+            hi = np.where(above, hi, mid)
+        out[:, :2] += hi[:, None] * unit
+        return out
 
     def estimates(self) -> np.ndarray:
         """Estimated target positions (N, 2) [m]: the first two coordinates (Table III)."""

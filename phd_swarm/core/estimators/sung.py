@@ -67,6 +67,9 @@ OPTIONS = (
               low=0.0, high=1.0),
     ParamSpec("p_d_upper", 0.6, "sung_gmphd: upper p_D threshold of the limited-FoV rule",
               low=0.0, high=1.0),
+    ParamSpec("fov_push_to", "paper", "sung_gmphd: how far eq. 11 pushes a component: as "
+              "printed, by p_D times its distance to the robot (paper), or just until its "
+              "p_D is p_d_lower (threshold)", choices=("paper", "threshold")),
     ParamSpec("p_d_model", "integrated", "sung_gmphd: p(F) integrated over the component "
               "(eq. 10) or taken at its mean", choices=("integrated", "mean")),
     ParamSpec("process_noise_sd", 0.1, "sung_gmphd: sd of the linear model's random step "
@@ -119,6 +122,7 @@ class SungSetup:
     model: GmPhdModel
     fov: DiskFov
     fov_push: tuple[float, float] | None
+    fov_push_to: str
     confirm_after: int
     rounded_extraction: bool
     merge_newborns: bool
@@ -142,7 +146,8 @@ class SungEstimator(Estimator):
     def __init__(self, setup: SungSetup) -> None:
         self.setup = setup
         self.gmphd = GmPhdEstimator(setup.model, setup.initial, p_d=setup.fov,
-                                    birth=PerMeasurementBirth(1.0), fov_push=setup.fov_push)
+                                    birth=PerMeasurementBirth(1.0), fov_push=setup.fov_push,
+                                    fov_push_to=setup.fov_push_to)
         self.tracks = TrackLayer(setup.model.merge_threshold, setup.confirm_after)
         self.step = -1
         self._component_track = np.full(len(setup.initial), -1)
@@ -318,7 +323,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SungSetup:
                              opt("initial_offset_draw"), float(opt("initial_variance")),
                              scenario.env, rng)
     return SungSetup(model, fov, (lower, upper) if opt("fov_rule") else None,
-                     int(opt("confirm_after")), opt("extraction") == "rounded",
+                     opt("fov_push_to"), int(opt("confirm_after")), opt("extraction") == "rounded",
                      opt("newborn_merge") == "same_step", gp, initial)
 
 

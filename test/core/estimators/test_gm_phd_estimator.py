@@ -193,3 +193,33 @@ def test_limited_fov_rule_pushes_edge_components_away_on_a_miss():
     np.testing.assert_allclose(np.sort(off.mixture.means[:, 0]), [5.0, 25.0, 60.0])
     with pytest.raises(ValueError, match="fov_push must be"):
         GmPhdEstimator(_static_model(), fov_push=(0.6, 0.4))
+
+
+def test_the_threshold_reading_pushes_edge_components_just_until_p_d_is_the_lower_one():
+    from phd_swarm.core.estimators.detection import DiskFov
+
+    sensor = np.array([10.0, -5.0])
+    direction = np.array([[1.0, 0.0], [0.6, 0.8], [-0.8, 0.6], [0.0, 1.0]])
+    means = sensor + np.array([[24.8], [25.0], [25.05], [5.0]]) * direction
+    covs = np.array([np.eye(2), [[2.0, 0.5], [0.5, 1.0]], 0.5 * np.eye(2), np.eye(2)])
+    mix = GaussianMixture(np.ones(4), means, covs)
+    fov = DiskFov(radius=25.0, p_inside=0.98)
+    p_d = fov(means, covs, sensor)
+    assert np.all((p_d[:3] >= 0.4) & (p_d[:3] <= 0.6)) and p_d[3] > 0.6
+    est = GmPhdEstimator(_static_model(prune_threshold=1e-9, merge_threshold=0.0), mix,
+                         p_d=fov, fov_push=(0.4, 0.6), fov_push_to="threshold")
+    est.update(_scan(0, np.empty((0, 2)), sensor))
+    out = est.mixture
+    by_input = [int(np.argmin(np.abs(out.weights - (1 - p) * 1.0))) for p in p_d]
+    moved = out.means[by_input]
+    # Edge components: on their ray from the sensor, farther out, with p_D = 0.4.
+    for i in range(3):
+        step = moved[i] - means[i]
+        assert np.dot(step, direction[i]) > 0
+        assert abs(step[0] * direction[i][1] - step[1] * direction[i][0]) < 1e-9
+        assert fov(moved[i:i + 1], covs[i:i + 1], sensor)[0] == pytest.approx(0.4, abs=1e-9)
+        # Far less than the paper's p_D times ~25 m.
+        assert np.hypot(*step) < 0.5 * p_d[i] * 25.0
+    np.testing.assert_allclose(moved[3], means[3])
+    with pytest.raises(ValueError, match="fov_push_to"):
+        GmPhdEstimator(_static_model(), fov_push=(0.4, 0.6), fov_push_to="far")
