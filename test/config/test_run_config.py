@@ -58,3 +58,9 @@ def test_overrides_are_checked_by_the_same_specs():
     with pytest.raises(ValueError, match=r"^robot: tick_period: expected a number in "
                                          r"\[0.01, 600\], got 'slow'"):
         rc.with_overrides(robot={"tick_period": "slow"})
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (ROOT / "config").glob("*.yaml")))
+def test_every_shipped_config_loads(name):
+    rc = load_run_config(ROOT / "config" / name)
+    assert rc.scenario.name == name.removesuffix(".yaml")

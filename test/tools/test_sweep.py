@@ -460,3 +460,19 @@ def test_a_controller_registered_by_a_plugin_runs_in_a_sweep(tmp_path):
     assert np.array_equal(engine.world.robot_positions, start), "a stationary team stays put"
     row, _ = sweep.run_trial(trial)
     assert float(rows["stationary"]["ospa_final"]) == row["ospa_final"]
+
+
+def test_a_sung_sweep_scores_its_own_estimates_and_saves_the_papers_figures(tmp_path):
+    # Sung & Tokekar's system has no grid PHD: the sweep scores the estimator's own
+    # targets and keeps the figures of its estimator part (sung_figures) in the series.
+    assert sweep.main(["sung_planners", "--quick", "--workers", "1", "--out",
+                       str(tmp_path)]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "results.csv")))
+    assert sorted(r["method"] for r in rows) == ["largest_exact", "lawn_exact",
+                                                 "nearest_exact"]
+    for r in rows:
+        s = sweep.load_series(tmp_path / "series" / f"{r['trial']}.npz")
+        assert len(s["ospa"]) == 600 and np.all(s["cardinality_true"] == 10)
+        assert {"components", "tracks", "mahal_closest", "largest_variance"} <= set(s)
+        assert np.nanmax(s["tracks"]) > 0 and np.all(s["ospa"] <= 100.0)
+        assert float(r["ospa_mean_window"]) == pytest.approx(float(np.mean(s["ospa"])))

@@ -25,6 +25,17 @@ def check_probability(name: str, p: np.ndarray) -> None:
 def check_spd(name: str, a: np.ndarray) -> None:
     """Raise unless every matrix of the stack ``a`` (..., n, n) is symmetric positive definite."""
     check_finite(name, a)
+    if a.shape[-2:] == (2, 2):
+        # Closed form for 2 x 2 (a hot path of the Gaussian-mixture filters): the same
+        # tolerance as the allclose below, and a Cholesky factor exists iff a00 > 0 and
+        # a11 - a10^2 / a00 > 0 (numpy's factor reads the lower triangle).
+        a00, a10, a01, a11 = a[..., 0, 0], a[..., 1, 0], a[..., 0, 1], a[..., 1, 1]
+        if np.any(np.abs(a01 - a10) > 1e-12 + 1e-9 * np.abs(a10)):
+            raise ValueError(f"{name} must be symmetric")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if not np.all((a00 > 0.0) & (a11 - a10 * a10 / a00 > 0.0)):
+                raise ValueError(f"{name} must be positive definite")
+        return
     if not np.allclose(a, np.swapaxes(a, -1, -2), rtol=1e-9, atol=1e-12):
         raise ValueError(f"{name} must be symmetric")
     try:
