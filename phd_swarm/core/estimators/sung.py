@@ -175,8 +175,7 @@ class SungEstimator(Estimator):
         if not rows:
             return
         w = self.setup.gp.window
-        histories = [(np.asarray(tracks[carried[i]].steps[-w:], dtype=float),
-                      np.stack(tracks[carried[i]].states[-w:])) for i in rows]
+        histories = [tracks[carried[i]].window(w) for i in rows]
         predicted = predict_tracks(histories, np.full(len(rows), self.step + 1.0),
                                    self.setup.gp)
         mix = self.gmphd.mixture

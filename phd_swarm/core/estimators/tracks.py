@@ -65,6 +65,48 @@ class Track:
         """The latest associated state (d,)."""
         return self.states[-1]
 
+    def window(self, w: int) -> tuple[np.ndarray, np.ndarray]:
+        """The last ``min(w, life)`` steps (n,) and states (n, d), as read-only arrays.
+
+        Kept in arrays beside the lists (grown by doubling), so that a GP prediction over
+        the recent history (Sec. V-B) does not restack it every step.
+        """
+        n = self.life
+        if self._size != n:                      # the lists were appended to directly
+            self._steps_buf = np.asarray(self.steps, dtype=float)
+            self._states_buf = np.asarray(self.states, dtype=float).reshape(n, -1)
+            self._size = n
+        lo = max(0, n - int(w))
+        steps, states = self._steps_buf[lo:n], self._states_buf[lo:n]
+        steps.flags.writeable = False
+        states.flags.writeable = False
+        return steps, states
+
+    def append(self, step: int, state: np.ndarray) -> None:
+        """Associate ``state`` (d,) at ``step``: the lists and the arrays."""
+        state = np.array(state, dtype=float)
+        if self._size == len(self.states):
+            n = self._size
+            if n == self._steps_buf.shape[0]:
+                cap = max(16, 2 * n)
+                steps = np.empty(cap)
+                states = np.empty((cap, state.shape[0]))
+                if n:
+                    steps[:n] = self._steps_buf[:n]
+                    states[:n] = self._states_buf[:n]
+                self._steps_buf, self._states_buf = steps, states
+            self._steps_buf[n] = step
+            self._states_buf[n] = state
+            self._size = n + 1
+        self.steps.append(int(step))
+        self.states.append(state)
+
+    _steps_buf: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False,
+                                   compare=False)
+    _states_buf: np.ndarray = field(default_factory=lambda: np.empty((0, 0)), repr=False,
+                                    compare=False)
+    _size: int = field(default=0, repr=False, compare=False)
+
 
 class TrackLayer:
     """Tracks kept from the targets extracted each step (Sung & Tokekar Sec. V-F).
@@ -139,14 +181,14 @@ class TrackLayer:
                     continue
                 taken.add(t)
                 ids[i] = self.tracks[t].track_id
-                self.tracks[t].steps.append(int(step))
-                self.tracks[t].states.append(states[i].copy())
+                self.tracks[t].append(step, states[i])
                 self._last[t] = states[i]
         new = np.flatnonzero(ids < 0)
         if new.size:
             self._reserve(len(self.tracks) + new.size, states.shape[1])
         for i in new:
-            track = Track(self._next_id, [int(step)], [states[i].copy()])
+            track = Track(self._next_id)
+            track.append(step, states[i])
             self._next_id += 1
             self._last[len(self.tracks)] = states[i]
             self.tracks.append(track)

@@ -94,3 +94,19 @@ def test_a_target_displaced_by_a_nearer_one_takes_its_next_gating_track():
     # Both targets are nearest to track 0; the nearer keeps it, the other takes track 1.
     ids = layer.update(1, np.array([[0.2, 0.0], [0.9, 0.0]]), _covs(2))
     assert ids.tolist() == [0, 1]
+
+
+def test_a_tracks_window_is_its_last_steps_and_states_as_arrays():
+    layer = TrackLayer(gate=10.0)
+    for k in range(40):
+        layer.update(k, np.array([[0.1 * k, 0.0]]), _covs(1))
+    track = layer.tracks[0]
+    steps, states = track.window(25)
+    np.testing.assert_array_equal(steps, np.arange(15, 40))
+    np.testing.assert_array_equal(states, np.stack(track.states[-25:]))
+    assert not states.flags.writeable
+    assert track.window(100)[0].shape == (40,)
+    # Appended to by hand (the lists are public): the arrays follow.
+    track.steps.append(40)
+    track.states.append(np.array([4.0, 0.0]))
+    np.testing.assert_array_equal(track.window(2)[1], [[0.1 * 39, 0.0], [4.0, 0.0]])
