@@ -8,7 +8,7 @@ from phd_swarm.core import registry
 from phd_swarm.core.agent import Agent, Team, robot_generator
 from phd_swarm.core.controllers.base import Controller, Decision
 from phd_swarm.core.estimators.base import Estimator
-from phd_swarm.core.exchange.base import Exchange
+from phd_swarm.core.exchange.none import NoExchange
 from phd_swarm.core.exchange.voronoi_phd.participant import Participant
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import scenario as sc
@@ -89,43 +89,6 @@ class _CountingEstimator(Estimator):
         return float(len(self.calls))
 
 
-class _Silent(Exchange):
-    """Test exchange: a robot that tells nobody anything (one robot, Sung & Tokekar)."""
-
-    def __init__(self) -> None:
-        self._step = -1
-
-    def initialise(self, ids, positions) -> None:
-        pass
-
-    def observe_team(self, step, ids, positions, alive) -> None:
-        pass
-
-    def rejoin(self, step, ids, positions, alive) -> None:
-        pass
-
-    def start_step(self, step, position, power_weight, z):
-        self._step = step
-        return []
-
-    def receive(self, msg) -> bool:
-        return False
-
-    def advance(self):
-        return []
-
-    def tick(self):
-        return []
-
-    @property
-    def done(self) -> bool:
-        return True
-
-    @property
-    def step(self) -> int:
-        return self._step
-
-
 def test_an_estimator_of_its_own_is_driven_by_the_agent_before_the_exchange():
     names = {"estimator": "test_counting", "exchange": "test_silent",
              "controller": "test_sees_estimator"}
@@ -139,7 +102,7 @@ def test_an_estimator_of_its_own_is_driven_by_the_agent_before_the_exchange():
 
     registry.register("estimator", names["estimator"], lambda s, r: _CountingEstimator(),
                       description="test", provides=("grid_density",))
-    registry.register("exchange", names["exchange"], lambda s, r: _Silent(),
+    registry.register("exchange", names["exchange"], lambda s, r: NoExchange(),
                       description="test")
     registry.register("controller", names["controller"], lambda s, r: _Sees(),
                       description="test")

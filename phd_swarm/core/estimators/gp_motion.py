@@ -208,6 +208,31 @@ def _weights(offsets: bytes, w: int, hp: GpHyperparameters) -> np.ndarray:
     return a
 
 
+def _track_pair(item: object, where: str, values: str, dim: int | None,
+                min_len: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """One track ``(steps (T,), values (T, d))`` of a sequence, checked.
+
+    ``dim`` is the d of the tracks before it (None for the first); ``min_len`` the fewest
+    points T allowed. Errors name ``where`` and ``values``.
+    """
+    try:
+        steps, vals = item  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise ValueError(f"{where} must be a pair (steps, {values})") from None
+    steps = np.asarray(steps, dtype=float)
+    vals = np.asarray(vals, dtype=float)
+    if steps.ndim != 1 or steps.shape[0] < min_len:
+        raise ValueError(f"{where} steps must have shape (T,) with T >= {min_len}, "
+                         f"got {steps.shape}")
+    d = (vals.shape[1] if vals.ndim == 2 else -1) if dim is None else dim
+    if vals.shape != (steps.shape[0], d) or d < 1:
+        raise ValueError(f"{where} {values} must have shape ({steps.shape[0]}, d) with d >= 1 "
+                         f"the same for all tracks, got {vals.shape}")
+    check_finite(f"{where} steps", steps)
+    check_finite(f"{where} {values}", vals)
+    return steps, vals
+
+
 def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
                    k_next: float | np.ndarray, hp: GpHyperparameters) -> np.ndarray:
     """Predicted means of N tracks of any length at a step (eq. 8 on the last points).
@@ -245,22 +270,8 @@ def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
     steps_list, states_list = [], []
     dim = None
     for i, item in enumerate(histories):
-        try:
-            steps, states = item
-        except (TypeError, ValueError):
-            raise ValueError(f"histories[{i}] must be a pair (steps, states)") from None
-        steps = np.asarray(steps, dtype=float)
-        states = np.asarray(states, dtype=float)
-        if steps.ndim != 1 or steps.shape[0] < 1:
-            raise ValueError(f"histories[{i}] steps must have shape (T,) with T >= 1, "
-                             f"got {steps.shape}")
-        if dim is None:
-            dim = states.shape[1] if states.ndim == 2 else -1
-        if states.shape != (steps.shape[0], dim) or dim < 1:
-            raise ValueError(f"histories[{i}] states must have shape ({steps.shape[0]}, d) "
-                             f"with d >= 1 the same for all tracks, got {states.shape}")
-        check_finite(f"histories[{i}] steps", steps)
-        check_finite(f"histories[{i}] states", states)
+        steps, states = _track_pair(item, f"histories[{i}]", "states", dim, min_len=1)
+        dim = states.shape[1]
         if np.any(np.diff(steps) <= 0.0):
             raise ValueError(f"histories[{i}] steps must be strictly increasing")
         steps_list.append(steps[-hp.window:])
@@ -329,21 +340,8 @@ def _windows(tracks: Sequence[tuple[np.ndarray, np.ndarray]], window: int, strid
     times, values = [], []
     dim = None
     for i, item in enumerate(tracks):
-        try:
-            steps, pos = item
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}[{i}] must be a pair (steps, positions)") from None
-        steps = np.asarray(steps, dtype=float)
-        pos = np.asarray(pos, dtype=float)
-        if steps.ndim != 1:
-            raise ValueError(f"{name}[{i}] steps must have shape (T,), got {steps.shape}")
-        if dim is None:
-            dim = pos.shape[1] if pos.ndim == 2 else -1
-        if pos.shape != (steps.shape[0], dim) or dim < 1:
-            raise ValueError(f"{name}[{i}] positions must have shape ({steps.shape[0]}, d) "
-                             f"with d >= 1 the same for all tracks, got {pos.shape}")
-        check_finite(f"{name}[{i}] steps", steps)
-        check_finite(f"{name}[{i}] positions", pos)
+        steps, pos = _track_pair(item, f"{name}[{i}]", "positions", dim)
+        dim = pos.shape[1]
         starts = np.arange(0, steps.shape[0] - window + 1, stride)
         if starts.size:
             idx = starts[:, None] + np.arange(window)
