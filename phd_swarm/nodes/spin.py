@@ -15,14 +15,19 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import rclpy
+from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
 from phd_swarm.nodes.params import ParameterError
+
+#: Seconds a process waits at exit, in all, for its last messages to be acknowledged.
+FLUSH_TIMEOUT = 2.0
 
 
 def make_executor(context: Any = None, kind: str | None = None) -> Any:
@@ -42,7 +47,8 @@ def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = No
 
     SIGINT and SIGTERM set a flag that the spin loop checks every 0.1 s, instead of rclpy's
     handlers raising KeyboardInterrupt inside an executor callback (which aborts the
-    process with the EventsExecutor); nodes then get ``close()``d and destroyed normally.
+    process with the EventsExecutor); nodes then get ``close()``d, their publishers flushed
+    (:func:`flush_publishers`) and destroyed normally.
     """
     stop = []
     rclpy.init(args=sys.argv if args is None else args,
@@ -71,8 +77,28 @@ def spin_nodes(factory: Callable[[], Sequence[Any]], args: list[str] | None = No
             close = getattr(node, "close", None)
             if close is not None:
                 close()
+        flush_publishers(nodes, FLUSH_TIMEOUT)
+        for node in nodes:
             node.destroy_node()
         rclpy.try_shutdown()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return code
+
+
+def flush_publishers(nodes: Sequence[Any], timeout: float) -> bool:
+    """Wait until matched readers acknowledged what ``nodes`` published; True if they all did.
+
+    ``timeout`` [s] bounds the wait for all publishers together.
+
+    A reliable writer that is destroyed forgets what its readers have not acknowledged yet:
+    without this, the messages of a node's last step (sent just before Ctrl-C) could miss
+    the recorder, which run_swarm stops after the other nodes for that reason.
+    """
+    deadline = time.monotonic() + timeout
+    for node in nodes:
+        for pub in list(node.publishers):
+            left = deadline - time.monotonic()
+            if left <= 0.0 or not pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))):
+                return False
+    return True

@@ -13,8 +13,10 @@
 4. when the world is done, lets the monitor write ``summary.json``, stops the recorder so
    that ``run.mcap`` is closed cleanly (it checks that every step message is in the log),
    stops the robots, adds the recorder's completeness report to ``summary.json``, and
-   reports. Ctrl-C stops every child at once and is done within :data:`STOP_GRACE` s plus
-   the clean-up of Fast DDS's shared memory, whatever the team size.
+   reports. Ctrl-C stops every child but the recorder at once (each flushes what it
+   published), then the recorder, so the log keeps every message sent before the Ctrl-C;
+   it is done within twice :data:`STOP_GRACE` s plus the clean-up of Fast DDS's shared
+   memory, whatever the team size.
 
 A robot process that dies mid-run does not stop the run: the world counts it dead after
 ``step_timeout`` and the summary lists it in ``dead_robots``. A team that does not come up
@@ -323,6 +325,8 @@ def run(opts: argparse.Namespace) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         if interrupted or code == EXIT_NOT_READY:
+            # The recorder last: it takes what the others flushed as they stopped.
+            swarm.stop_many([n for n in swarm.procs if n != "recorder"], STOP_GRACE)
             swarm.stop_all(STOP_GRACE)
         else:
             swarm.stop_many(["world", "monitor"], grace=10.0)
