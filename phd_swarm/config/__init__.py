@@ -180,7 +180,7 @@ class RunConfig:
     def write_params(self, path: str | Path) -> Path:
         """Write :meth:`params_document` to ``path``; returns the path."""
         path = Path(path)
-        path.write_text(yaml.safe_dump(self.params_document(), sort_keys=False))
+        path.write_text(dump_params(self.params_document()))
         return path
 
     def param(self, kind: str, name: str) -> Any:
@@ -191,6 +191,28 @@ class RunConfig:
             if spec.name == name:
                 return self.shared.get(name, spec.default)
         raise KeyError(f"{kind} has no parameter {name!r}")
+
+
+#: Plain scalars that ROS's parameter-file parser (rcl_yaml_param_parser, YAML 1.1 booleans)
+#: reads as booleans although PyYAML writes them unquoted as strings.
+_ROS_BOOLEAN_WORDS = frozenset({"y", "n", "yes", "no", "on", "off", "true", "false"})
+
+
+class _ParamsDumper(yaml.SafeDumper):
+    """A SafeDumper that quotes the strings ROS would read as booleans (e.g. the axis 'y')."""
+
+
+def _represent_str(dumper: yaml.SafeDumper, value: str) -> yaml.ScalarNode:
+    style = "'" if value.lower() in _ROS_BOOLEAN_WORDS else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", value, style=style)
+
+
+_ParamsDumper.add_representer(str, _represent_str)
+
+
+def dump_params(document: Mapping[str, Any]) -> str:
+    """A ROS parameter file's text: YAML whose strings ROS reads back as strings."""
+    return yaml.dump(document, Dumper=_ParamsDumper, sort_keys=False)
 
 
 def _check_block(block: Any, where: str, specs: tuple[ParamSpec, ...],

@@ -35,6 +35,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -43,8 +44,13 @@ from phd_swarm.nodes import topics as T
 #: Robot topics written by the world at step k (expected while the robot is alive at k).
 ROBOT_INPUTS = ("measurements", "pose")
 
-#: Robot topics written by the robot when it finishes step k.
-ROBOT_OUTPUTS = ("status", "density", "cell", "goal", "estimates")
+#: Robot topics written by the robot when it finishes step k, whatever the system: the
+#: others come with the parts' capabilities (:func:`robot_outputs`).
+ROBOT_OUTPUTS = ("status", "goal", "estimates")
+
+#: Robot step topics that a capability of the system's parts brings: (role, capability).
+OUTPUT_OF = {"density": ("estimator", "grid_density"), "cell": ("exchange", "cell"),
+             "components": ("estimator", "gaussian_mixture"), "tracks": ("estimator", "tracks")}
 
 #: Topics of an optional node: absent rather than missing when none holds a message.
 OPTIONAL_PREFIX = "/monitor/"
@@ -60,16 +66,48 @@ def step_of(stamp_ns: int, dt: float) -> int:
     return int(round(stamp_ns / (dt * 1e9)))
 
 
-def step_topics(robots: int, robot_density: bool = True,
+def robot_outputs(system: Any, publish_density: bool = True) -> tuple[str, ...]:
+    """The step topics a robot of ``system`` writes, in the order of the topic table.
+
+    :data:`ROBOT_OUTPUTS`, and those of :data:`OUTPUT_OF` whose capability the system's
+    parts provide (``density`` only with ``publish_density``).
+    """
+    parts = system.parts()
+    have = {k for k, (role, cap) in OUTPUT_OF.items() if cap in parts[role].provides}
+    if not publish_density:
+        have.discard("density")
+    return tuple(k for k in T.ROBOT_TOPICS if k in ROBOT_OUTPUTS or k in have)
+
+
+def monitor_density(system: Any) -> bool:
+    """Whether the monitor of a ``system`` run assembles a team PHD image (grid estimators)."""
+    return "grid_density" in system.parts()["estimator"].provides
+
+
+def step_topics(robots: int, outputs: Iterable[str] = ("density", "cell", *ROBOT_OUTPUTS),
                 monitor_density: bool = True) -> list[str]:
-    """The step topics of a run of ``robots`` robots, in the order of the topic table."""
+    """The step topics of a run of ``robots`` robots, in the order of the topic table.
+
+    ``outputs``: the robots' output kinds (:func:`robot_outputs`; the default is a grid
+    system's).
+    """
     out = [name for name, (_, qos, *_) in T.TEAM_TOPICS.items()
            if qos == "STEP" or name == T.CLOCK]
     if not monitor_density:
         out.remove(T.MONITOR_DENSITY)
-    kinds = [k for k in (*ROBOT_INPUTS, *ROBOT_OUTPUTS) if robot_density or k != "density"]
+    outputs = set(outputs)
+    kinds = [k for k in T.ROBOT_TOPICS if k in ROBOT_INPUTS or k in outputs]
     out += [T.robot_topic(r, k) for r in range(robots) for k in kinds]
     return out
+
+
+def run_step_topics(rc: Any) -> list[str]:
+    """The step topics of the run a :class:`~phd_swarm.config.RunConfig` describes."""
+    s = rc.scenario
+    return step_topics(s.robots, robot_outputs(s.system, bool(rc.param("robot",
+                                                                      "publish_density"))),
+                       monitor_density=bool(rc.param("monitor", "publish_density"))
+                       and monitor_density(s.system))
 
 
 @dataclass(frozen=True)

@@ -100,7 +100,8 @@ def values(seq, field: str) -> np.ndarray:
     return out
 
 
-def _finite(value: float, field: str, low: float | None = None) -> float:
+def finite(value: float, field: str, low: float | None = None) -> float:
+    """``value`` as a float; InvalidMessage naming ``field`` unless finite (and >= ``low``)."""
     if not math.isfinite(value) or (low is not None and value < low):
         raise InvalidMessage(f"{field}: {value!r} is not a finite number"
                              + ("" if low is None else f" >= {low}"))
@@ -167,8 +168,8 @@ def from_ros(msg, grid: Grid, max_measurements: int) -> Message:
     """
     if isinstance(msg, RobotState):
         return StateMsg(msg.robot_id, msg.step, point_xy(msg.position, "position"),
-                        _finite(msg.power_weight, "power_weight", 0.0),
-                        _finite(msg.cell_radius, "cell_radius", 0.0))
+                        finite(msg.power_weight, "power_weight", 0.0),
+                        finite(msg.cell_radius, "cell_radius", 0.0))
     if isinstance(msg, CellPolygon):
         n = len(msg.contact_ids)
         if not (len(msg.contact_positions) == len(msg.contact_power_weights)
@@ -181,7 +182,7 @@ def from_ros(msg, grid: Grid, max_measurements: int) -> Message:
         if np.any(rho < 0) or np.any(radii < 0):
             raise InvalidMessage("contact table: negative power weight or cell radius")
         return CellMsg(msg.robot_id, msg.step, point_xy(msg.generator, "generator"),
-                       _finite(msg.power_weight, "power_weight", 0.0),
+                       finite(msg.power_weight, "power_weight", 0.0),
                        xy(msg.vertices, "vertices"),
                        tuple(int(i) for i in msg.neighbour_ids),
                        tuple(int(i) for i in msg.contact_ids),

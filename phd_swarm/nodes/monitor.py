@@ -1,17 +1,23 @@
 """Team monitor: assembles the team PHD, extracts the team estimate, scores it with OSPA.
 
 An observer only: it subscribes to the world's truth and team state and to every robot's
-density window, status and cell, and never publishes anything a robot reads. For each step
-k, once the density windows of every robot alive at step k have arrived (a robot the world
-declared dead during step k is not waited for), it
+status and step outputs, and never publishes anything a robot reads. For each step k, once
+the outputs of every robot alive at step k have arrived (a robot the world declared dead
+during step k is not waited for), it
 
-1. adds the windows into the team PHD image (each bin is owned by exactly one robot, so the
-   sum is the union of the robots' bins, exact in float64);
-2. scores it against the truth of step k (:func:`phd_swarm.core.scoring.score_step`): the
-   team estimate (Dames Sec. IV), the expected number of targets (the total mass, Dames
-   eq. 2) and OSPA (c, p from the scenario; Dames eq. 12);
-4. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` and
-   ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
+1. for a grid PHD (estimator ``grid_density``; Dames, Chen): adds the robots' density
+   windows into the team PHD image (each bin is owned by exactly one robot, so the sum is
+   the union of the robots' bins, exact in float64) and scores it against the truth of
+   step k (:func:`phd_swarm.core.scoring.score_step`): the team estimate (Dames Sec. IV),
+   the expected number of targets (the total mass, Dames eq. 2) and OSPA (c, p from the
+   scenario; Dames eq. 12);
+2. for any other estimator (Sung & Tokekar's GM-PHD): scores the union of the robots' own
+   ``estimates`` with the sum of their expected counts
+   (:func:`phd_swarm.core.scoring.score_estimates`), and computes the estimator part's own
+   figures (its ``figures`` hook, e.g. Sung & Tokekar's tracks and Mahalanobis distances)
+   from the robots' ``components`` and ``tracks`` (:mod:`phd_swarm.nodes.gm_convert`);
+3. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` (grid
+   only) and ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
 After the scenario's last step it writes ``summary_path`` (DESIGN.md "Outputs of a run"); a
 run in which no step was processed writes none, so it cannot pass for a result.
@@ -34,8 +40,8 @@ from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import MONITOR, SHARED
-from phd_swarm.core.scoring import score_step, series_summary
-from phd_swarm.nodes import completeness, convert
+from phd_swarm.core.scoring import score_estimates, score_step, series_summary
+from phd_swarm.nodes import completeness, convert, gm_convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
 from phd_swarm.nodes.params import declare, declare_scenario
@@ -43,11 +49,16 @@ from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
+    GaussianMixture,
     RobotStatus,
     TargetSet,
     TeamMetrics,
     TeamState,
+    TrackSet,
 )
+
+#: Most components / targets a robot's message may hold (bigger ones are rejected).
+MAX_COMPONENTS = 100_000
 
 
 class MonitorNode(Node):
@@ -86,7 +97,20 @@ class MonitorNode(Node):
         self.rejected = 0
         self.truth: dict[int, np.ndarray] = {}
         self.alive: dict[int, frozenset[int]] = {}
-        self.densities: dict[int, dict[int, DensityGrid]] = defaultdict(dict)
+        #: Whether the team estimate is a grid PHD image (else the robots' own estimates).
+        self.grid_phd = completeness.monitor_density(self.scenario.system)
+        #: The robot outputs a step waits for: density windows, or estimates (and the
+        #: components and tracks the figures hook reads).
+        outputs = completeness.robot_outputs(self.scenario.system)
+        self.inputs = (("density",) if self.grid_phd else
+                       tuple(k for k in ("estimates", "components", "tracks") if k in outputs))
+        part = self.scenario.system.parts()["estimator"]
+        self.figures_hook = (None if self.grid_phd else part.extras.get("figures"))
+        #: Names of the figures the hook returned (row keys of :attr:`series`).
+        self.figure_names: list[str] = []
+        #: Step -> robot -> output kind -> message.
+        self.outputs: dict[int, dict[int, dict[str, Any]]] = defaultdict(
+            lambda: defaultdict(dict))
         self.statuses: dict[int, dict[int, RobotStatus]] = defaultdict(dict)
         self.cells: dict[int, np.ndarray] = {}
         self.positions: dict[int, np.ndarray] = {}
@@ -103,21 +127,27 @@ class MonitorNode(Node):
                                                  publisher_qos("STEP"))
         self.estimates_pub = self.create_publisher(TargetSet, T.MONITOR_ESTIMATES,
                                                    publisher_qos("STEP"))
-        self.density_pub = self.create_publisher(DensityGrid, T.MONITOR_DENSITY,
-                                                 publisher_qos("STEP"))
+        self.density_pub = (self.create_publisher(DensityGrid, T.MONITOR_DENSITY,
+                                                  publisher_qos("STEP"))
+                            if self.grid_phd else None)
         self.markers_pub = self.create_publisher(MarkerArray, T.MONITOR_MARKERS,
                                                  publisher_qos("OBSERVATION"))
         self.create_subscription(TargetSet, T.WORLD_TRUTH, self._on_truth,
                                  subscription_qos("STEP"))
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
+        types = {"density": DensityGrid, "estimates": TargetSet,
+                 "components": GaussianMixture, "tracks": TrackSet}
         for r in ids:
-            self.create_subscription(DensityGrid, T.robot_topic(r, "density"),
-                                     self._on_density, subscription_qos("STEP"))
+            for kind in self.inputs:
+                self.create_subscription(types[kind], T.robot_topic(r, kind),
+                                         self._output_callback(r, kind),
+                                         subscription_qos("STEP"))
             self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
                                      self._on_status, subscription_qos("STEP"))
-            self.create_subscription(CellPolygon, T.robot_topic(r, "cell"), self._on_cell,
-                                     subscription_qos("LATCHED"))
+            if "cell" in outputs:
+                self.create_subscription(CellPolygon, T.robot_topic(r, "cell"),
+                                         self._on_cell, subscription_qos("LATCHED"))
         self.create_timer(0.5, self._on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     # ---------------------------------------------------------------- inputs
@@ -144,10 +174,12 @@ class MonitorNode(Node):
             self._reject(f"team state of step {msg.step}: {exc}")
         self._touch()
 
-    def _on_density(self, msg: DensityGrid) -> None:
-        if msg.step >= self.next_step:
-            self.densities[msg.step][msg.owner_id] = msg
-        self._touch()
+    def _output_callback(self, robot: int, kind: str):
+        def callback(msg) -> None:
+            if msg.step >= self.next_step:
+                self.outputs[msg.step][robot][kind] = msg
+            self._touch()
+        return callback
 
     def _on_status(self, msg: RobotStatus) -> None:
         if msg.state == RobotStatus.STATE_STEP_DONE and msg.step >= self.next_step:
@@ -185,9 +217,10 @@ class MonitorNode(Node):
         while not self.done and self.next_step < self.scenario.steps:
             k = self.next_step
             expected = self._expected(k)
-            have = self.densities.get(k, {})
+            have = {r for r, got in self.outputs.get(k, {}).items()
+                    if all(kind in got for kind in self.inputs)}
             complete = (expected is not None and k in self.truth
-                        and expected <= set(have)
+                        and expected <= have
                         and expected <= set(self.statuses.get(k, {})))
             if not complete and not (force and k in self.truth and have):
                 return
@@ -197,16 +230,22 @@ class MonitorNode(Node):
             self._finish()
 
     def _process(self, k: int) -> None:
-        image = np.zeros(self.grid.shape)
-        have = self.densities.pop(k, {})
-        for rid in sorted(have):
-            try:
-                convert.add_density(image, have[rid], self.grid)
-            except convert.InvalidMessage as exc:
-                self._reject(f"density of robot {rid} at step {k}: {exc}")
+        have = {r: got for r, got in self.outputs.pop(k, {}).items()
+                if all(kind in got for kind in self.inputs)}
         truth = self.truth.pop(k)
-        score = score_step(self.grid, image, truth, self.scenario.extraction,
-                           self.scenario.ospa_c, self.scenario.ospa_p)
+        image = None
+        figures: dict[str, float] = {}
+        if self.grid_phd:
+            image = np.zeros(self.grid.shape)
+            for rid in sorted(have):
+                try:
+                    convert.add_density(image, have[rid]["density"], self.grid)
+                except convert.InvalidMessage as exc:
+                    self._reject(f"density of robot {rid} at step {k}: {exc}")
+            score = score_step(self.grid, image, truth, self.scenario.extraction,
+                               self.scenario.ospa_c, self.scenario.ospa_p)
+        else:
+            score, figures = self._score_estimates(k, have, truth)
         estimates = score.estimates
         statuses = self.statuses.pop(k, {})
         # Every message sent is received by its addressee, so the team's mean received
@@ -217,9 +256,9 @@ class MonitorNode(Node):
         alive = self.alive.get(k, frozenset())
         row = {"step": k, "t": k * self.dt, **score.row(),
                "robots_alive": len(alive), "robots_reported": len(have),
-               "messages_per_robot": msgs}
+               "messages_per_robot": msgs, **figures}
         self.series.append(row)
-        if self.keep_images:
+        if self.keep_images and image is not None:
             self.images[k] = image
         stamp = convert.stamp(k, self.dt)
         h = convert.header(k, self.dt, self.frame_id)
@@ -233,7 +272,7 @@ class MonitorNode(Node):
         self.estimates_pub.publish(convert.target_set(
             convert.TEAM_ID, k, np.arange(len(estimates)), estimates,
             row["expected_cardinality"], self.dt, self.frame_id))
-        if self.params["publish_density"]:
+        if self.params["publish_density"] and self.density_pub is not None:
             self.density_pub.publish(convert.density_grid(
                 convert.TEAM_ID, k, self.grid, np.arange(self.grid.size), image.ravel(),
                 self.dt, self.frame_id))
@@ -243,6 +282,32 @@ class MonitorNode(Node):
         every = self.params["progress_every"]
         if every and (k % every == 0 or k == self.scenario.steps - 1):
             self._log_progress(row)
+
+    def _score_estimates(self, k: int, have: dict[int, dict[str, Any]], truth: np.ndarray
+                         ) -> tuple[Any, dict[str, float]]:
+        """Score the union of the robots' own estimates; the estimator's figures too."""
+        points, expected, views = [], 0.0, []
+        for rid in sorted(have):
+            got = have[rid]
+            try:
+                points.append(convert.target_positions(got["estimates"]))
+                expected += convert.finite(got["estimates"].expected_cardinality,
+                                           "expected_cardinality", low=0.0)
+                if "components" in got and "tracks" in got:
+                    views.append(gm_convert.EstimatorView(
+                        gm_convert.mixture_from_ros(got["components"], MAX_COMPONENTS),
+                        gm_convert.tracks_from_ros(got["tracks"], MAX_COMPONENTS)))
+            except convert.InvalidMessage as exc:
+                self._reject(f"outputs of robot {rid} at step {k}: {exc}")
+        estimates = np.concatenate(points) if points else np.empty((0, 2))
+        score = score_estimates(estimates, expected, truth, self.scenario.ospa_c,
+                                self.scenario.ospa_p)
+        figures: dict[str, float] = {}
+        if self.figures_hook is not None and views and len(views) == len(have):
+            figures = self.figures_hook(views, truth, self.scenario.ospa_c,
+                                        self.scenario.ospa_p)
+            self.figure_names = self.figure_names or list(figures)
+        return score, figures
 
     def _log_progress(self, row: dict[str, Any]) -> None:
         wall = time.monotonic() - (self._wall_start or time.monotonic())
@@ -290,6 +355,8 @@ class MonitorNode(Node):
             "rejoined_robots": sorted(rejoined),
             "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
             "rejected_messages_monitor": self.rejected,
+            **({"figures": figure_means(self.series, self.figure_names)}
+               if self.figures_hook else {}),
         }
 
     def close(self) -> None:
@@ -312,6 +379,20 @@ class MonitorNode(Node):
             for pub in (self.metrics_pub, self.estimates_pub):
                 pub.wait_for_all_acked(Duration(seconds=5.0))
             self.finished = True
+
+
+def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, float | None]:
+    """The mean over steps of each figure ``names`` of the rows (NaN steps left out).
+
+    The system's own figures (e.g. Sung & Tokekar's ``components``, ``tracks``,
+    ``mahal_closest``); None where no step has a value.
+    """
+    out: dict[str, float | None] = {}
+    for name in names:
+        values = np.array([r.get(name, np.nan) for r in series], dtype=float)
+        values = values[np.isfinite(values)]
+        out[name] = float(values.mean()) if values.size else None
+    return out
 
 
 def main(args: list[str] | None = None) -> int:

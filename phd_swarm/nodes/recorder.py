@@ -285,9 +285,7 @@ class Recorder(Node):
                                                 "robots": str(s.robots)})
         self._dt_ns = s.dt * 1e9
         self._robots = s.robots
-        self._step_topics = frozenset(completeness.step_topics(
-            s.robots, robot_density=bool(rc.param("robot", "publish_density")),
-            monitor_density=bool(rc.param("monitor", "publish_density"))))
+        self._step_topics = frozenset(completeness.run_step_topics(rc))
         for spec in T.run_topics(range(s.robots)):
             if self._inboxes or not _INBOX_TOPIC.match(spec.name):
                 self.subscribe(spec.name, spec.type, reader_qos(spec.qos),

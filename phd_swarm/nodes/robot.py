@@ -1,11 +1,14 @@
-"""Robot node: one robot's distributed PHD filter and controller over ROS topics.
+"""Robot node: one robot's PHD filter, exchange and controller over ROS topics.
 
 A thin adapter over :class:`phd_swarm.core.agent.Agent`, the one agent step the in-memory
 engine runs too, with the parts that ``scenario.system`` names (:mod:`phd_swarm.core.registry`;
 for Dames' and Chen's systems the exchange is
 :class:`phd_swarm.core.exchange.voronoi_phd.participant.Participant`, Dames Alg. 1-2 with
 Chen's cumulative state, and the controllers are those of :mod:`phd_swarm.core.controllers`,
-Dames eq. 8, Chen eq. 2-3 and 12-14). Per step k:
+Dames eq. 8, Chen eq. 2-3 and 12-14; for Sung & Tokekar's single robot there is no exchange,
+``none``, and every step is done as soon as the scan is in). What it publishes at the end of
+a step follows from what the parts provide (:mod:`phd_swarm.nodes.robot_outputs`: a grid
+window and a cell, or Gaussian components, tracks and markers). Per step k:
 
 1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
    q^k): the step starts, and the protocol's messages go to the contacts' inboxes
@@ -14,8 +17,8 @@ Dames eq. 8, Chen eq. 2-3 and 12-14). Per step k:
    sender, right address, step in range) and fed to the protocol; bad ones are dropped with
    a logged reason and counted (``rejected_messages`` in the status);
 3. when the protocol step is done, the controller picks the goal and the next power weight;
-   the node publishes the local density window, cell, local estimates, goal and a
-   ``STEP_DONE`` status, which is what the world waits for in lockstep mode.
+   the node publishes its outputs (:class:`~phd_swarm.nodes.robot_outputs.RobotOutputs`),
+   the goal and a ``STEP_DONE`` status, which is what the world waits for in lockstep mode.
 
 A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds: if no
 new protocol message arrived during a period while the step waits, one round passes
@@ -74,15 +77,9 @@ from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.robot_outputs import RobotOutputs
 from phd_swarm.nodes.wire import wire_for
-from phd_swarm_msgs.msg import (
-    CellPolygon,
-    DensityGrid,
-    MeasurementSet,
-    RobotStatus,
-    TargetSet,
-    TeamState,
-)
+from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TeamState
 
 #: Wall seconds without any executor callback after which a robot stops saying it is alive.
 HUNG_AFTER = 30.0
@@ -121,7 +118,8 @@ class RobotNode(Node):
         self.grid = self.scenario.grid
         self.agent = Team.build(self.scenario,
                                 timeout_ticks=self.params["timeout_ticks"]).agent(rid)
-        #: The exchange participant (Dames' protocol): step state, cell, bins, counters.
+        #: The exchange participant (for Dames' protocol: step state, cell, bins, counters;
+        #: for ``none``: done at once).
         self.filter = self.agent.exchange
         #: How the exchange's messages travel (inbox kinds, ROS types, conversions).
         self.wire = wire_for(self.agent.team.parts["exchange"])
@@ -158,10 +156,8 @@ class RobotNode(Node):
                                  f"{self.resolve_topic_name('status')}")
         self.status_pub = self.create_publisher(RobotStatus, "status", publisher_qos("STEP"))
         self.goal_pub = self.create_publisher(PoseStamped, "goal", publisher_qos("STEP"))
-        self.cell_pub = self.create_publisher(CellPolygon, "cell", publisher_qos("STEP"))
-        self.density_pub = self.create_publisher(DensityGrid, "density", publisher_qos("STEP"))
-        self.estimates_pub = self.create_publisher(TargetSet, "estimates",
-                                                   publisher_qos("STEP"))
+        #: The step outputs the system's parts bring (density, cell, estimates, components...).
+        self.outputs = RobotOutputs(self, self.agent, self.params["publish_density"])
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
                                  subscription_qos("STEP"))
         for kind, typ in self.wire.types.items():
@@ -222,7 +218,7 @@ class RobotNode(Node):
         Discovery and matching of a new publisher take a while (much longer with many
         processes); doing it between steps keeps it off the step's critical path.
         """
-        for c in self.filter.contacts:
+        for c in getattr(self.filter, "contacts", ()):
             for kind in self.wire.types:
                 self._peer_publisher(c, kind)
 
@@ -231,8 +227,7 @@ class RobotNode(Node):
             return
         need = self.params["observers"]
         matched = (self.status_pub.get_subscription_count() >= 1 + need
-                   and (not self.params["publish_density"]
-                        or self.density_pub.get_subscription_count() >= need)
+                   and self.outputs.matched(need)
                    and all(p.get_subscription_count() >= 1 for p in self._peer_pubs.values()))
         waited = time.monotonic() - self._started
         if not matched and waited < self.params["ready_timeout"]:
@@ -412,28 +407,14 @@ class RobotNode(Node):
         for old in [s for s in self._received if s < k]:
             del self._received[old]
         d = self.agent.finish_step()
-        position = self.agent.position
         self._prepare_peers()
-        if self.params["publish_density"]:
-            self.density_pub.publish(convert.density_grid(self.robot_id, k, self.grid, f.bins,
-                                                          f.weights, self.dt, self.frame_id))
-        self.cell_pub.publish(CellPolygon(
-            header=convert.header(k, self.dt, self.frame_id), robot_id=self.robot_id, step=k,
-            generator=Point(x=float(position[0]), y=float(position[1])),
-            power_weight=float(d.power_weight), vertices=convert.points(f.cell),
-            neighbour_ids=convert.u32(f.neighbours)))
-        estimator = self.agent.estimator
-        est = estimator.estimates(f.bins, f.weights)
-        self.estimates_pub.publish(convert.target_set(
-            self.robot_id, k, np.arange(len(est)), est, estimator.expected_count(f.weights),
-            self.dt, self.frame_id))
+        self.outputs.publish(k, d)
         self.goal_pub.publish(convert.pose_stamped(d.goal, k, self.dt, self.frame_id))
         stats = f.stats
         self.status_pub.publish(RobotStatus(
             header=convert.header(k, self.dt, self.frame_id), state=RobotStatus.STATE_STEP_DONE,
             robot_id=self.robot_id, step=k, goal=Point(x=float(d.goal[0]), y=float(d.goal[1])),
-            power_weight=float(d.power_weight), owned_bins=int(f.bins.size),
-            mass=float(np.sum(f.weights)), messages_received=self._received.pop(k, 0),
+            power_weight=float(d.power_weight), messages_received=self._received.pop(k, 0),
             messages_sent=self._sent, rejected_messages=sum(self.rejections.values()),
             dropped_messages=int(stats.get("dropped", 0)),
             timeouts=int(stats.get("timeouts", 0)), orphan_bins=int(stats.get("orphan_bins", 0)),
@@ -441,7 +422,7 @@ class RobotNode(Node):
             resent=int(stats.get("resent", 0)), duplicates=int(stats.get("duplicates", 0)),
             rejoins=int(stats.get("rejoins", 0)),
             revived_peers=int(stats.get("revived_peers", 0)),
-            dead_ids=convert.u32(sorted(f.dead))))
+            **self.outputs.status_fields()))
 
     # ---------------------------------------------------------------- transport
     def _send(self, envelopes: list[Envelope]) -> None:

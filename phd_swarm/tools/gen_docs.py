@@ -68,7 +68,18 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("density"): "The robot's PHD over a window of the grid (parameter "
                                      "`publish_density`); the monitor assembles the team "
                                      "PHD from them.",
-    ROBOT_PATTERN.format("estimates"): "Targets extracted from the robot's local PHD.",
+    ROBOT_PATTERN.format("estimates"): "Targets extracted from the robot's local PHD (its "
+                                       "owned bins, or its own Gaussian mixture).",
+    ROBOT_PATTERN.format("components"): "The robot's GM-PHD components: weights, means, "
+                                        "covariances (float64, exact); the monitor and "
+                                        "evaluate.sh compute Sung & Tokekar's figures from "
+                                        "them and the tracks.",
+    ROBOT_PATTERN.format("tracks"): "The robot's targets with their track ids, life "
+                                    "lengths, confirmed flags, weights and covariances "
+                                    "(Sung & Tokekar Sec. V-E, V-F).",
+    ROBOT_PATTERN.format("markers"): "Covariance ellipses, targets and confirmed track ids, "
+                                     "field of view and planned path, for RViz2 / Foxglove "
+                                     "(`robot_markers.RobotMarkers`).",
     ROBOT_PATTERN.format("inbox/state"): "A contact's state: position, power weight, cell "
                                          "radius (Dames Alg. 1 line 1).",
     ROBOT_PATTERN.format("inbox/cell"): "A contact's cell, neighbour ids and contact table "

@@ -64,3 +64,12 @@ def test_overrides_are_checked_by_the_same_specs():
 def test_every_shipped_config_loads(name):
     rc = load_run_config(ROOT / "config" / name)
     assert rc.scenario.name == name.removesuffix(".yaml")
+
+
+def test_strings_that_ros_reads_as_booleans_are_quoted_in_params_files():
+    from phd_swarm.config import dump_params
+
+    text = dump_params({"a": {"ros__parameters": {"axis": "y", "rule": "On", "kind": "x",
+                                                  "flag": True}}})
+    assert "axis: 'y'" in text and "rule: 'On'" in text and "kind: x" in text
+    assert "flag: true" in text

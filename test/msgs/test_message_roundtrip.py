@@ -15,6 +15,7 @@ from phd_swarm_msgs.msg import (
     DensityGrid,
     EtaPartial,
     EtaTotal,
+    GaussianMixture,
     MeasurementSet,
     ParticleTransfer,
     RobotState,
@@ -22,6 +23,7 @@ from phd_swarm_msgs.msg import (
     TargetSet,
     TeamMetrics,
     TeamState,
+    TrackSet,
 )
 
 
@@ -70,6 +72,13 @@ EXAMPLES = [
                 ospa_cardinality=3.25, ospa_c=10.0, ospa_p=1.0, cardinality_true=30,
                 cardinality_estimated=27, expected_cardinality=28.5, robots_alive=19,
                 robots_reported=19, messages_per_robot=55.5),
+    GaussianMixture(header=_header(13), source_id=0, step=13, dim=2, weights=[1.0, 1e-3],
+                    means=[10.5, -3.25, 149.0, 0.0625],
+                    covariances=[50.0, 0.5, 0.5, 50.0, 1.0, 0.0, 0.0, 2.0 / 3.0]),
+    GaussianMixture(header=_header(14), source_id=0, step=14, dim=2),
+    TrackSet(header=_header(15), source_id=0, step=15, track_ids=[0, 7], life=[3, 1],
+             confirmed=[True, False], weights=[0.98, 0.5], positions=_points(2, 12.0),
+             covariances=[1.0, 0.25, 0.25, 2.0, 3.0, 0.0, 0.0, 3.0]),
 ]
 
 

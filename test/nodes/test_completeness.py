@@ -73,7 +73,7 @@ def test_a_run_without_a_monitor_lists_its_topics_as_absent():
 
 def test_step_topics_follow_the_density_switches_and_steps_come_from_stamps():
     assert T.MONITOR_DENSITY not in step_topics(1, monitor_density=False)
-    assert T.robot_topic(0, "density") not in step_topics(1, robot_density=False)
+    assert T.robot_topic(0, "density") not in step_topics(1, outputs=("status", "cell"))
     assert not any("/inbox/" in t or "markers" in t for t in step_topics(3))
     assert step_of(int(7 * 0.5e9), 0.5) == 7 and step_of(int(3 * 0.1e9) - 1, 0.1) == 3
     assert ranges([5, 1, 2, 3, 9, 10]) == "1-3, 5, 9-10" and ranges([]) == ""
@@ -87,3 +87,17 @@ def test_reporters_is_one_rule_for_sets_and_arrays():
     a = np.array([True, True, False])
     b = np.array([True, False, True])
     np.testing.assert_array_equal(reporters(a, b), [True, False, False])
+
+
+def test_a_robot_writes_the_outputs_its_parts_provide():
+    from phd_swarm.nodes.completeness import monitor_density, robot_outputs
+    from phd_swarm.sim.scenario import dames_static, sung_tokekar
+
+    dames, sung = dames_static().system, sung_tokekar().system
+    assert robot_outputs(dames) == ("goal", "status", "cell", "density", "estimates")
+    assert robot_outputs(dames, publish_density=False) == ("goal", "status", "cell",
+                                                           "estimates")
+    assert robot_outputs(sung) == ("goal", "status", "estimates", "components", "tracks")
+    assert monitor_density(dames) and not monitor_density(sung)
+    topics = step_topics(1, robot_outputs(sung), monitor_density=False)
+    assert T.robot_topic(0, "tracks") in topics and T.robot_topic(0, "cell") not in topics

@@ -116,3 +116,16 @@ class Controller(ABC):
             The robot's own generator (seeded from the scenario seed and the robot id);
             the only source of randomness a controller may use.
         """
+
+    def planned_path(self) -> np.ndarray:
+        """The waypoints the robot will visit next, in order, for display [m].
+
+        Read-only: it changes nothing the controller decides. The default is no path;
+        planners that keep one (e.g. Sung & Tokekar's, :mod:`.sung_planners`) override it.
+
+        Returns
+        -------
+        np.ndarray, shape (P, 2)
+            World frame; P may be 0 (no plan, or before the first :meth:`decide`).
+        """
+        return np.empty((0, 2))

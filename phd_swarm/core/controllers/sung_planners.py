@@ -22,6 +22,11 @@ at that position (the "original position" of Fig. 6), both taken lazily from the
 :meth:`~phd_swarm.core.controllers.base.Controller.decide`. The robot's goal is its current
 waypoint; it moves on to the next once it stands on it (within :data:`REACHED`).
 
+Each planner also tells what it will visit next, for display
+(:meth:`~phd_swarm.core.controllers.base.Controller.planned_path`): the lawn mower the rest
+of its sweep, the Gaussian planners the goal they chose last (or their lawn mower's rest).
+Asking changes no decision.
+
 Reference: Y. Sung and P. Tokekar, "GM-PHD filter for searching and tracking an unknown
 number of targets with a mobile sensor with limited FOV", IEEE T-ASE, 2022, Sec. V-G and
 VI-A.
@@ -280,6 +285,22 @@ class LawnMower(Controller):
         """Goal: the current waypoint of the lawn-mower path; power weight 0."""
         return Decision(goal=self.goal(knowledge.position), power_weight=0.0)
 
+    def planned_path(self) -> np.ndarray:
+        """The rest of the current sweep (Fig. 6), from the current waypoint on [m].
+
+        Returns
+        -------
+        np.ndarray, shape (P, 2)
+            The waypoints as of the last :meth:`goal`: the current one first, the robot's
+            start last (a repeating path then begins its next sweep, not shown); only the
+            start once the sweeps are done; none before the first :meth:`begin`.
+        """
+        if self.path is None or self.home is None:
+            return np.empty((0, 2))
+        if self.finished:
+            return self.home.reshape(1, 2).copy()
+        return self.path[self.index:].copy()
+
 
 def mixture_arrays(knowledge: Knowledge, who: str) -> tuple[np.ndarray, ...]:
     """Weights (J,), position means (J, 2) [m] and covariances (J, 2, 2) of the robot's GM.
@@ -322,6 +343,8 @@ class NearestGaussian(Controller):
     def __init__(self, config: SungPlannerConfig) -> None:
         self.config = config
         self.fallback = LawnMower(config)
+        #: The component mean chosen at the last decision [m]; None when it fell back.
+        self.chosen: np.ndarray | None = None
 
     def choose(self, position: np.ndarray, weights: np.ndarray, means: np.ndarray,
                covs: np.ndarray) -> int | None:
@@ -339,7 +362,22 @@ class NearestGaussian(Controller):
         w, means, covs = mixture_arrays(knowledge, self.name)
         j = self.choose(q, w, means, covs)
         goal = self.fallback.goal(q) if j is None else means[j].copy()
+        self.chosen = None if j is None else goal.copy()
         return Decision(goal=goal, power_weight=0.0)
+
+    def planned_path(self) -> np.ndarray:
+        """The goal of the last decision (Sec. V-G), or the fallback's path [m].
+
+        Returns
+        -------
+        np.ndarray, shape (P, 2)
+            The chosen component's mean as one waypoint, or, when the last decision fell
+            back to the lawn mower, its remaining waypoints
+            (:meth:`LawnMower.planned_path`); none before the first decision.
+        """
+        if self.chosen is not None:
+            return self.chosen.reshape(1, 2).copy()
+        return self.fallback.planned_path()
 
 
 class LargestGaussian(NearestGaussian):

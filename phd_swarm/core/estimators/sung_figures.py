@@ -69,10 +69,31 @@ def step_figures(estimators: list[Any], truth: np.ndarray, c: float,
     if len(estimators) != 1:
         raise ValueError(f"Sung & Tokekar's figures are for one robot, got {len(estimators)}")
     est = estimators[0]
-    truth = np.asarray(truth, dtype=float).reshape(-1, 2)
-    mix = est.mixture
     positions, covs, weights, track_ids = est.targets()
-    confirmed = est.confirmed_mask()
+    return track_figures(est.mixture.weights, positions, covs, weights, track_ids,
+                         est.confirmed_mask(), truth, c, p)
+
+
+def track_figures(component_weights: np.ndarray, positions: np.ndarray, covs: np.ndarray,
+                  weights: np.ndarray, track_ids: np.ndarray, confirmed: np.ndarray,
+                  truth: np.ndarray, c: float, p: float) -> dict[str, float]:
+    """The figures of one step from arrays: what a robot publishes, or a log holds.
+
+    Parameters
+    ----------
+    component_weights : np.ndarray, shape (J,)
+        The weights of the GM-PHD components (Layer 1).
+    positions, covs, weights, track_ids, confirmed : np.ndarray
+        The targets (Layer 2): positions (N, 2) [m], covariances (N, 2, 2), the weights of
+        their components (N,), their track ids (N,) and whether each track is confirmed
+        (N,) bool.
+    truth : np.ndarray, shape (M, 2)
+        True target positions at the step [m].
+    c, p : float
+        OSPA cut-off [m] and order.
+    """
+    truth = np.asarray(truth, dtype=float).reshape(-1, 2)
+    confirmed = np.asarray(confirmed, dtype=bool)
     ids, first = np.unique(track_ids[confirmed], return_index=True)
     pos_c, cov_c = positions[confirmed][first], covs[confirmed][first]
     # A component with weight >= 1.5 gives several targets: count its weight once.
@@ -87,8 +108,9 @@ def step_figures(estimators: list[Any], truth: np.ndarray, c: float,
         if d.shape[1] > 1:
             second = float(d[:, 1].mean())
     largest = float(np.linalg.eigvalsh(cov_c)[:, -1].max()) if len(ids) else nan
-    return {"components": float(len(mix)), "tracks": float(len(ids)),
-            "weights_components": float(mix.weights.sum()), "weights_tracks": weights_tracks,
+    return {"components": float(len(component_weights)), "tracks": float(len(ids)),
+            "weights_components": float(np.sum(component_weights)),
+            "weights_tracks": weights_tracks,
             "mahal_closest": closest, "mahal_closest_sq": closest_sq, "mahal_second": second,
             "largest_variance": largest,
             "ospa_tracks": float(ospa_components(truth, pos_c, c, p).distance)}

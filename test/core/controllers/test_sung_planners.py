@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from phd_swarm.core import registry
-from phd_swarm.core.controllers.base import Knowledge
+from phd_swarm.core.controllers.base import Controller, Decision, Knowledge
 from phd_swarm.core.controllers.sung_planners import (
     LargestGaussian,
     LawnMower,
@@ -224,3 +224,76 @@ def test_registry_entries_make_the_planners(name, cls, requires):
     assert type(c) is cls
     d = c.decide(knowledge([11.0, 10.0], mixture([], [])), RNG)
     assert np.allclose(d.goal, CORNER)
+
+
+# --- planned_path: what the robot's markers draw; read-only, decisions unchanged ---------
+
+
+def test_controller_default_planned_path_is_empty():
+    class Still(Controller):
+        def decide(self, knowledge, rng):
+            return Decision(goal=knowledge.position)
+
+    assert Still().planned_path().shape == (0, 2)
+
+
+def test_lawnmower_planned_path_runs_from_the_goal_to_the_start():
+    c = LawnMower(config())
+    assert c.planned_path().shape == (0, 2)  # nothing laid before the first decision
+    start = np.array([3.0, 4.0])
+    q = start
+    for k in range(3000):  # past the first sweep's end (2427 steps from the corner)
+        goal = c.decide(knowledge(q), RNG).goal
+        path = c.planned_path()
+        assert np.array_equal(path[0], goal)
+        assert np.array_equal(path[-1], start)
+        if k == 0:
+            assert np.array_equal(path[:-1], c.path[:-1]) and len(path) == 15
+        q = np.clip(next_position(q, goal, D_STEP), 0.0, SIDE)
+    path[:] = -1.0  # a copy: the plan is unchanged
+    assert np.array_equal(c.planned_path()[-1], start)
+
+
+def test_lawnmower_planned_path_after_the_last_sweep_is_the_start():
+    start = np.array([140.0, 146.0])
+    c = LawnMower(config(lawnmower_sweeps=1))
+    q = start
+    for _ in range(2400):
+        goal = c.decide(knowledge(q), RNG).goal
+        q = np.clip(next_position(q, goal, D_STEP), 0.0, SIDE)
+    assert c.finished
+    assert np.array_equal(c.planned_path(), [start])
+
+
+def test_planned_path_leaves_the_decisions_bit_identical():
+    mixes = [mixture([1.0, 0.3], [[40.0, 60.0], [90.0, 20.0]]),
+             mixture([], []), mixture([0.2], [[10.0, 140.0]])]
+    for cls in (LawnMower, NearestGaussian, LargestGaussian):
+        plain, asked = cls(config(min_weight=0.25)), cls(config(min_weight=0.25))
+        q1 = q2 = np.array([7.0, 3.0])
+        for k in range(600):
+            mix = mixes[(k // 50) % 3]
+            g1 = plain.decide(knowledge(q1, mix), RNG).goal
+            asked.planned_path()
+            g2 = asked.decide(knowledge(q2, mix), RNG).goal
+            asked.planned_path()[:] = np.nan
+            assert np.array_equal(g1, g2)
+            q1 = np.clip(next_position(q1, g1, D_STEP), 0.0, SIDE)
+            q2 = np.clip(next_position(q2, g2, D_STEP), 0.0, SIDE)
+
+
+@pytest.mark.parametrize("cls", [NearestGaussian, LargestGaussian])
+def test_gaussian_planner_path_is_its_goal_or_its_fallback_path(cls):
+    c = cls(config(min_weight=0.5))
+    assert c.planned_path().shape == (0, 2)
+    start = np.array([12.0, 9.0])
+    mix = mixture([1.0], [[100.0, 50.0]], [[[9.0, 2.0], [2.0, 1.0]]])
+    goal = c.decide(knowledge(start, mix), RNG).goal
+    assert np.array_equal(c.planned_path(), [goal]) and np.array_equal(goal, [100.0, 50.0])
+    # Nothing heavy enough: the lawn mower's remaining waypoints, from its goal to the start.
+    goal = c.decide(knowledge(start, mixture([0.2], [[100.0, 50.0]])), RNG).goal
+    path = c.planned_path()
+    assert np.array_equal(path[0], goal) and np.array_equal(goal, CORNER)
+    assert np.array_equal(path, c.fallback.planned_path()) and np.array_equal(path[-1], start)
+    goal = c.decide(knowledge(start, mix), RNG).goal  # back on a component
+    assert np.array_equal(c.planned_path(), [goal])

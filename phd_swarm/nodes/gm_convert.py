@@ -1,0 +1,147 @@
+"""Gaussian mixtures and track sets as ROS messages, and their checks on the way in.
+
+A robot whose estimator provides ``gaussian_mixture`` publishes its components as a
+``phd_swarm_msgs/GaussianMixture`` on ``components``; one that provides ``tracks``
+publishes its targets with their tracks as a ``phd_swarm_msgs/TrackSet`` on ``tracks``
+(:mod:`phd_swarm.nodes.robot_outputs`). The monitor and the log readers take them back with
+:func:`mixture_from_ros` and :func:`tracks_from_ros`, which raise
+:class:`~phd_swarm.nodes.convert.InvalidMessage` naming the field of a message that cannot
+be right (lengths that disagree, non-finite numbers, negative weights, covariances that are
+not symmetric positive definite). Numbers travel as float64: what a log holds is the
+filter's state, bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from phd_swarm.core.estimators.checks import check_spd
+from phd_swarm.nodes.convert import InvalidMessage, f64, header, points, u32, xy
+from phd_swarm_msgs.msg import GaussianMixture, TrackSet
+
+
+@dataclass(frozen=True)
+class MixtureArrays:
+    """A Gaussian mixture as arrays: weights (J,), means (J, d), covariances (J, d, d)."""
+
+    weights: np.ndarray
+    means: np.ndarray
+    covs: np.ndarray
+
+
+@dataclass(frozen=True)
+class TrackArrays:
+    """Targets with their tracks, as arrays (element i is target i).
+
+    Attributes
+    ----------
+    track_ids, life : np.ndarray of int, shape (N,)
+    confirmed : np.ndarray of bool, shape (N,)
+    weights : np.ndarray, shape (N,)
+    positions : np.ndarray, shape (N, 2) [m]
+    covs : np.ndarray, shape (N, 2, 2) [m^2]
+    """
+
+    track_ids: np.ndarray
+    life: np.ndarray
+    confirmed: np.ndarray
+    weights: np.ndarray
+    positions: np.ndarray
+    covs: np.ndarray
+
+
+def gaussian_mixture(source_id: int, step: int, weights: np.ndarray, means: np.ndarray,
+                     covs: np.ndarray, dt: float, frame_id: str) -> GaussianMixture:
+    """A ``GaussianMixture`` of components (weights (J,), means (J, d), covs (J, d, d))."""
+    means = np.asarray(means, dtype=float)
+    dim = means.shape[1] if means.ndim == 2 else 2
+    return GaussianMixture(header=header(step, dt, frame_id), source_id=int(source_id),
+                           step=int(step), dim=int(dim), weights=f64(weights),
+                           means=f64(means.ravel()), covariances=f64(np.ravel(covs)))
+
+
+def mixture_from_ros(msg: GaussianMixture, max_components: int) -> MixtureArrays:
+    """The checked arrays of a ``GaussianMixture``; InvalidMessage naming the problem."""
+    d, j = int(msg.dim), len(msg.weights)
+    if d < 1:
+        raise InvalidMessage(f"dim: {d}, must be at least 1")
+    if j > max_components:
+        raise InvalidMessage(f"weights: {j} components, more than {max_components}")
+    if len(msg.means) != j * d or len(msg.covariances) != j * d * d:
+        raise InvalidMessage(f"means / covariances: {len(msg.means)} / "
+                             f"{len(msg.covariances)} values for {j} components of dim {d}")
+    weights = np.frombuffer(msg.weights, dtype=np.float64) if j else np.empty(0)
+    means = np.frombuffer(msg.means, dtype=np.float64).reshape(j, d)
+    covs = np.frombuffer(msg.covariances, dtype=np.float64).reshape(j, d, d)
+    if not np.all(np.isfinite(weights)) or np.any(weights < 0):
+        raise InvalidMessage("weights: non-finite or negative weight")
+    if not np.all(np.isfinite(means)):
+        raise InvalidMessage("means: non-finite value")
+    _check_covs(covs, "covariances")
+    return MixtureArrays(weights, means, covs)
+
+
+def track_set(source_id: int, step: int, tracks: TrackArrays, dt: float,
+              frame_id: str) -> TrackSet:
+    """A ``TrackSet`` of targets with their tracks."""
+    return TrackSet(header=header(step, dt, frame_id), source_id=int(source_id),
+                    step=int(step), track_ids=u32(tracks.track_ids), life=u32(tracks.life),
+                    confirmed=[bool(c) for c in tracks.confirmed],
+                    weights=f64(tracks.weights), positions=points(tracks.positions),
+                    covariances=f64(np.ravel(tracks.covs)))
+
+
+def tracks_from_ros(msg: TrackSet, max_targets: int) -> TrackArrays:
+    """The checked arrays of a ``TrackSet``; InvalidMessage naming the problem."""
+    n = len(msg.track_ids)
+    if n > max_targets:
+        raise InvalidMessage(f"track_ids: {n} targets, more than {max_targets}")
+    lengths = {"life": len(msg.life), "confirmed": len(msg.confirmed),
+               "weights": len(msg.weights), "positions": len(msg.positions),
+               "covariances": len(msg.covariances) / 4}
+    wrong = [name for name, m in lengths.items() if m != n]
+    if wrong:
+        raise InvalidMessage(f"{', '.join(wrong)}: not one per target ({n} track ids)")
+    weights = np.array(msg.weights, dtype=float)
+    if not np.all(np.isfinite(weights)) or np.any(weights < 0):
+        raise InvalidMessage("weights: non-finite or negative weight")
+    covs = np.array(msg.covariances, dtype=float).reshape(n, 2, 2)
+    _check_covs(covs, "covariances")
+    return TrackArrays(np.array(msg.track_ids, dtype=np.int64),
+                       np.array(msg.life, dtype=np.int64),
+                       np.array(msg.confirmed, dtype=bool), weights,
+                       xy(msg.positions, "positions"), covs)
+
+
+def _check_covs(covs: np.ndarray, field: str) -> None:
+    if not len(covs):
+        return
+    try:
+        check_spd(field, covs)
+    except ValueError as exc:
+        raise InvalidMessage(str(exc)) from None
+
+
+class EstimatorView:
+    """A robot's estimator as its messages show it, for an estimator part's ``figures`` hook.
+
+    It has what the hook reads: ``mixture.weights``, ``targets()``, ``confirmed_mask()``.
+    The monitor and the log readers compute Sung & Tokekar's figures
+    (:func:`phd_swarm.core.estimators.sung_figures.step_figures`) from a robot's
+    ``components`` and ``tracks`` with it, as the in-memory engine does from the estimator.
+    """
+
+    def __init__(self, mixture: MixtureArrays, tracks: TrackArrays) -> None:
+        self.mixture = mixture
+        self.tracks = tracks
+
+    def targets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (N, 2), covariances (N, 2, 2), weights (N,) and track ids (N,)."""
+        t = self.tracks
+        return t.positions, t.covs, t.weights, t.track_ids
+
+    def confirmed_mask(self) -> np.ndarray:
+        """Which targets are on a confirmed track, (N,) bool."""
+        return self.tracks.confirmed
