@@ -7,8 +7,11 @@ belief, seed 0), of its moving-target twin with GP prediction
 (``sung_moving.yaml``, method ``gp``), and of the per-step scoring the sweeps add (OSPA,
 tracks, Mahalanobis distances). Then the GP prediction alone
 (:func:`phd_swarm.core.estimators.gp_motion.predict_tracks`) per confirmed track per step,
-for 1, 10 and 50 tracks at the 100-point window of ``config/sung_moving.yaml``. The issue's
-targets: a trial in <= 10 s, the GP in <= 1 ms per track per step.
+for 1, 10 and 50 tracks at the 100-point window of ``config/sung_moving.yaml``. Last, the
+system as ROS nodes: ``run_swarm.sh config/sung_static.yaml --robots 1`` in lockstep
+(world, monitor, recorder and the robot, one process each), its real-time factor while
+stepping and the CPU of each process. The issue's targets: a trial in <= 10 s, the GP in
+<= 1 ms per track per step, the ROS run >= 5x real time.
 
 Writes ``bench/results/sung-<date>.json``.
 """
@@ -16,6 +19,10 @@ Writes ``bench/results/sung-<date>.json``.
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -69,6 +76,27 @@ def gp_cost(tracks: int, window: int, repeats: int = 200) -> float:
     return 1000.0 * (time.process_time() - t0) / repeats / tracks
 
 
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def ros_run(steps: int | None) -> dict[str, object]:
+    """``run_swarm.sh config/sung_static.yaml --robots 1`` (recorded); its figures."""
+    env = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "42"),
+               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / "sung_static.yaml"),
+               "--robots", "1", "--out", tmp, "--name", "run", "--quiet",
+               *(["--duration", str(float(steps))] if steps else [])]
+        subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
+        s = json.loads((Path(tmp) / "run" / "summary.json").read_text())
+    return {"case": "ROS nodes, lockstep, recorded (config/sung_static.yaml)",
+            "steps": s["steps"], "complete": s["complete"],
+            "stepping_wall_s": round(s["stepping_wall_s"], 2),
+            "total_wall_s": round(s["wall_duration_s"], 2),
+            "real_time_factor": round(s["real_time_factor"], 2),
+            "cpu_s": s["cpu_s"]}
+
+
 def main() -> None:
     """Time the two trials and the GP, print the figures and write them."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -96,6 +124,10 @@ def main() -> None:
     results.append({"case": "GP prediction, window 100, ms per track per step", **gp})
     print("GP prediction, window 100 [ms per track per step]: "
           + ", ".join(f"{k}: {v}" for k, v in gp.items()))
+    ros = ros_run(steps)
+    results.append(ros)
+    print(f"ROS nodes (lockstep, recorded): {ros['steps']} steps in {ros['stepping_wall_s']} s "
+          f"wall, {ros['real_time_factor']}x real time; CPU s per process {ros['cpu_s']}")
     write_results(args.out, "sung", machine_meta(), results)
 
 

@@ -116,13 +116,17 @@ def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
         assert rows[key]["ospa_last_half"] < 0.5 * rows[key]["ospa_c"], key
 
 
-def test_bench_sung_quick_times_a_trial_and_the_gp(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "sung", "--quick",
-                             "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
-    assert result.returncode == 0, result.stderr
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_sung_quick_times_a_trial_the_gp_and_the_ros_run(tmp_path, children):
+    proc = children.start([str(ROOT / "scripts" / "bench.sh"), "sung", "--quick",
+                           "--out", str(tmp_path)])
+    _, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
     data = json.loads(next(tmp_path.glob("sung-*.json")).read_text())
-    trials, gp = data["results"][:2], data["results"][2]
+    trials, gp, ros = data["results"][:2], data["results"][2], data["results"][3]
     assert [t["steps"] for t in trials] == [600, 600]
     assert all(t["engine_cpu_s"] > 0 and t["scoring_cpu_s"] > 0 for t in trials)
     assert all(gp[f"{n} tracks"] > 0 for n in (1, 10, 50))
+    assert ros["steps"] == 600 and ros["complete"] and ros["real_time_factor"] > 0
+    assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", "robot_0"}

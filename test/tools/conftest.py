@@ -43,3 +43,22 @@ def recorded_run(tmp_path_factory) -> Path:
         tmp_path_factory.mktemp("recorded"), "dames_static.yaml",
         "--robots", str(RECORDED["robots"]), "--targets", str(RECORDED["targets"]),
         "--duration", str(RECORDED["steps"] * 0.5), "--seed", str(RECORDED["seed"]))
+
+
+#: The recorded Sung & Tokekar run: one robot, lawn-mower, 20 % false positives, GP
+#: prediction, 400 steps of 1 s, seed 2.
+SUNG_RECORDED = {"steps": 400, "seed": 2}
+
+
+@pytest.fixture(scope="session")
+def sung_run(tmp_path_factory) -> Path:
+    """Directory of a finished ``run_swarm.sh config/sung_static.yaml --robots 1`` run."""
+    config = tmp_path_factory.mktemp("sung_config") / "sung_short.yaml"
+    text = (ROOT / "config" / "sung_static.yaml").read_text()
+    text = text.replace("false_positive_prob: 0.1 ", "false_positive_prob: 0.2 ").replace(
+        "fov_rule: true ", "fov_rule: true\n          gp_prediction: true ")
+    assert "gp_prediction: true" in text and "false_positive_prob: 0.2" in text
+    config.write_text(text)
+    return record_swarm_run(tmp_path_factory.mktemp("sung"), str(config), "--robots", "1",
+                            "--duration", str(float(SUNG_RECORDED["steps"])), "--seed",
+                            str(SUNG_RECORDED["seed"]))
