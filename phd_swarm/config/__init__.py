@@ -74,7 +74,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
 
 
 _PRESET_OF_KIND = {"static": "dames_static", "dames_walk": "dames_moving",
-                   "clustered_walk": "chen_clustered"}
+                   "clustered_walk": "chen_clustered", "turning_walk": "sung_tokekar"}
 
 
 def flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

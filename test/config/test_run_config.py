@@ -8,6 +8,7 @@ import pytest
 import yaml
 
 from phd_swarm.config import load_run_config, run_config_from_dict
+from phd_swarm.sim.scenario import TARGET_KINDS
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -73,3 +74,18 @@ def test_strings_that_ros_reads_as_booleans_are_quoted_in_params_files():
                                                   "flag": True}}})
     assert "axis: 'y'" in text and "rule: 'On'" in text and "kind: x" in text
     assert "flag: true" in text
+
+
+@pytest.mark.parametrize("kind", TARGET_KINDS)
+def test_a_scenario_of_every_target_kind_survives_the_params_file(kind, tmp_path):
+    import dataclasses
+
+    from phd_swarm.config import RunConfig, scenario_from_dict, scenario_to_dict
+    from phd_swarm.sim.scenario import sung_tokekar
+
+    base = sung_tokekar()
+    extra = ({"clusters": ((0.0, 0.0, 50.0, 50.0),), "per_cluster": (10,)}
+             if kind == "clustered_walk" else {})
+    s = base.with_overrides(targets=dataclasses.replace(base.targets, kind=kind, **extra))
+    assert scenario_from_dict(scenario_to_dict(s)) == s
+    RunConfig(s).write_params(tmp_path / "params.yaml")

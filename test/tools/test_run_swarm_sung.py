@@ -64,6 +64,6 @@ def test_tracks_keep_their_ids_and_confirmed_tracks_their_targets(sung_run):
     # target is static: the estimate moves with the updates, not by metres).
     for tid in confirmed_at:
         seq = positions[tid]
-        jumps = [float(np.hypot(*(b - a))) for (i, a), (j, b) in zip(seq, seq[1:])
-                 if j == i + 1]
+        jumps = [float(np.hypot(*(b - a)))
+                 for (i, a), (j, b) in zip(seq[:-1], seq[1:], strict=True) if j == i + 1]
         assert not jumps or np.median(jumps) < 2.0, (tid, jumps[:10])
