@@ -4,12 +4,14 @@ Drawn with matplotlib's object API on the non-interactive Agg backend, so they w
 machines without a display. The snapshot follows the papers' figures (Dames Fig. 3, Chen
 Fig. 2): the map, the PHD as a heat map (and Chen's cumulative density wc next to it),
 robots with their sensing disks, their cells, the goals they steer to, the true targets and
-the team's estimates.
+the team's estimates. A system without a grid PHD (Sung & Tokekar's GM-PHD) shows instead
+its mixture's components as 2-sigma ellipses and the robots' paths so far; and
+:func:`save_figures` draws its estimator's per-step figures over time.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,7 +22,11 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection, PatchCollection  # noqa: E402
+from matplotlib.collections import (  # noqa: E402
+    EllipseCollection,
+    LineCollection,
+    PatchCollection,
+)
 from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
@@ -30,6 +36,17 @@ ESTIMATE_COLOUR = "#D55E00"
 ROBOT_COLOUR = "#0072B2"
 GOAL_COLOUR = "#56B4E9"
 CELL_COLOUR = "0.35"
+COMPONENT_COLOUR = "#CC79A7"
+
+#: Panels of :func:`save_figures`: y label and (figure, legend label) pairs.
+FIGURE_PANELS = (
+    ("number", (("components", "GM components"), ("tracks", "confirmed tracks"))),
+    ("sum of weights", (("weights_components", "all components"),
+                        ("weights_tracks", "components of confirmed tracks"))),
+    ("Mahalanobis distance", (("mahal_closest", "truth to closest track"),
+                              ("mahal_second", "truth to second closest"))),
+    ("largest variance [m$^2$]", (("largest_variance", "of a confirmed track"),)),
+)
 
 
 @dataclass
@@ -43,8 +60,8 @@ class Frame:
     step : int
     extent : (xmin, ymin, xmax, ymax)
         The map.
-    phd : np.ndarray (ny, nx)
-        Team PHD, expected targets per bin.
+    phd : np.ndarray (ny, nx) or None
+        Team PHD, expected targets per bin; None for a system without a grid PHD.
     robots : dict of int to (2,) array
     alive : set of int
     fov_radius : float
@@ -56,12 +73,17 @@ class Frame:
     cumulative : np.ndarray (ny, nx) or None
         Chen's cumulative density wc, shown in a second panel when given.
     title : str
+    paths : dict of int to (S, 2) array
+        Each robot's path so far (drawn when given).
+    component_means, component_covs, component_weights : np.ndarray
+        A Gaussian mixture's components, (J, 2), (J, 2, 2) and (J,): drawn as 2-sigma
+        ellipses, more opaque the larger the weight (none by default).
     """
 
     t: float
     step: int
     extent: tuple[float, float, float, float]
-    phd: np.ndarray
+    phd: np.ndarray | None
     robots: dict[int, np.ndarray]
     alive: set[int]
     fov_radius: float
@@ -71,9 +93,41 @@ class Frame:
     estimates: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
     cumulative: np.ndarray | None = None
     title: str = ""
+    paths: dict[int, np.ndarray] = field(default_factory=dict)
+    component_means: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    component_covs: np.ndarray = field(default_factory=lambda: np.empty((0, 2, 2)))
+    component_weights: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+
+def ellipse_axes(covs: np.ndarray, sigmas: float = 2.0
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Full widths, heights and angles [deg] of the ``sigmas`` ellipses of covs (J, 2, 2).
+
+    The width lies along the major axis (the eigenvector of the largest eigenvalue).
+    """
+    values, vectors = np.linalg.eigh(covs)
+    axes = 2.0 * sigmas * np.sqrt(np.maximum(values, 0.0))
+    angles = np.degrees(np.arctan2(vectors[:, 1, 1], vectors[:, 0, 1]))
+    return axes[:, 1], axes[:, 0], angles
+
+
+def _draw_components(ax: Any, f: Frame) -> None:
+    if len(f.component_means):
+        widths, heights, angles = ellipse_axes(f.component_covs)
+        colours = np.tile(matplotlib.colors.to_rgba(COMPONENT_COLOUR), (len(widths), 1))
+        colours[:, 3] = np.clip(f.component_weights, 0.15, 1.0)
+        ax.add_collection(EllipseCollection(
+            widths, heights, angles, units="xy", offsets=f.component_means,
+            offset_transform=ax.transData, facecolors="none", edgecolors=colours,
+            linewidths=1.0, zorder=4))
+        ax.plot([], [], "-", color=COMPONENT_COLOUR, lw=1.0, label="component (2 sigma)")
+    for i, (_, path) in enumerate(sorted(f.paths.items())):
+        ax.plot(path[:, 0], path[:, 1], "-", color=ROBOT_COLOUR, lw=0.7, alpha=0.6, zorder=3,
+                label="path" if i == 0 else None)
 
 
 def _draw_team(ax: Any, f: Frame, legend: bool) -> None:
+    _draw_components(ax, f)
     live = [r for r in sorted(f.robots) if r in f.alive]
     dead = [r for r in sorted(f.robots) if r not in f.alive]
     if f.cells:
@@ -114,24 +168,26 @@ def _draw_team(ax: Any, f: Frame, legend: bool) -> None:
 
 def draw_snapshot(f: Frame, fig: Any | None = None) -> Any:
     """Draw ``f`` into ``fig`` (a new figure if None, cleared otherwise); returns the figure."""
-    panels = 2 if f.cumulative is not None else 1
-    if fig is None:
-        fig = plt.figure(figsize=(6.2 * panels, 5.6))
-    fig.clear()
-    axes = fig.subplots(1, panels, squeeze=False)[0]
-    xmin, ymin, xmax, ymax = f.extent
     # The PHD concentrates in a few bins at the targets: a square-root colour scale keeps the
     # weak mass of unexplored areas visible next to the peaks.
-    images = [(f.phd, "PHD [targets / bin] (square-root scale)", "viridis",
-               PowerNorm(0.5, vmin=0.0, vmax=max(float(f.phd.max()), 1e-12)))]
+    images: list[tuple | None] = [None if f.phd is None else (
+        f.phd, "PHD [targets / bin] (square-root scale)", "viridis",
+        PowerNorm(0.5, vmin=0.0, vmax=max(float(f.phd.max()), 1e-12)))]
     if f.cumulative is not None:
         images.append((f.cumulative, "cumulative density $w_c$", "magma", None))
-    for i, (ax, (img, label, cmap, norm)) in enumerate(zip(axes, images, strict=True)):
-        im = ax.imshow(img, origin="lower", extent=(xmin, xmax, ymin, ymax), cmap=cmap,
-                       norm=norm, interpolation="nearest", zorder=1)
-        fig.colorbar(im, ax=ax, shrink=0.82, label=label)
+    if fig is None:
+        fig = plt.figure(figsize=(6.2 * len(images), 5.6))
+    fig.clear()
+    axes = fig.subplots(1, len(images), squeeze=False)[0]
+    xmin, ymin, xmax, ymax = f.extent
+    for i, (ax, spec) in enumerate(zip(axes, images, strict=True)):
+        if spec is not None:
+            img, label, cmap, norm = spec
+            im = ax.imshow(img, origin="lower", extent=(xmin, xmax, ymin, ymax), cmap=cmap,
+                           norm=norm, interpolation="nearest", zorder=1)
+            fig.colorbar(im, ax=ax, shrink=0.82, label=label)
         _draw_team(ax, f, legend=(i == 0))
-    fig.suptitle(f.title or f"t = {f.t:.1f} s (step {f.step})", fontsize=10)
+    fig.suptitle(f.title or f"t = {f.t:.1f} s (step {f.step})", fontsize=10, wrap=True)
     fig.tight_layout()
     return fig
 
@@ -211,6 +267,57 @@ def save_series(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "
     a2.set_ylim(bottom=0)
     a2.legend(fontsize=8, loc="lower right")
     a2.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def figure_panels(names: Iterable[str]) -> list[tuple[str, list[tuple[str, str]]]]:
+    """The panels of :data:`FIGURE_PANELS` with those of their figures in ``names``."""
+    names = set(names)
+    panels = [(label, [(n, lab) for n, lab in series if n in names])
+              for label, series in FIGURE_PANELS]
+    return [p for p in panels if p[1]]
+
+
+def save_figures(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "") -> Path:
+    """An estimator's per-step figures over time (Sung & Tokekar Fig. 8-10), as a PNG.
+
+    ``rows`` are per-step dicts with ``t`` and the figures of :data:`FIGURE_PANELS` (e.g.
+    :mod:`phd_swarm.core.estimators.sung_figures`); a figure missing from a row, or NaN,
+    leaves a gap, and a panel none of whose figures is in the rows is left out
+    (:func:`figure_panels`); figures of no panel are not drawn. The true
+    number of targets (``cardinality_true``) is drawn with the sums of weights.
+
+    Raises
+    ------
+    ValueError
+        If the rows hold none of the figures.
+    """
+    present = {k for r in rows for k in r}
+    panels = figure_panels(present)
+    if not panels:
+        raise ValueError(f"{path}: no figures to draw (none of "
+                         f"{[n for _, s in FIGURE_PANELS for n, _ in s]})")
+    t = np.array([r["t"] for r in rows])
+    fig, axes = plt.subplots(len(panels), 1, figsize=(7.5, 2.1 * len(panels) + 0.6),
+                             sharex=True, squeeze=False)
+    colours = ("k", ESTIMATE_COLOUR)
+    for ax, (label, series) in zip(axes[:, 0], panels, strict=True):
+        for (name, legend), colour in zip(series, colours, strict=False):
+            ax.plot(t, [r.get(name, np.nan) for r in rows], color=colour, lw=1.0,
+                    label=legend)
+        if label == "sum of weights" and "cardinality_true" in present:
+            ax.step(t, [r.get("cardinality_true", np.nan) for r in rows], where="post",
+                    color=TRUTH_COLOUR, lw=1.0, ls="--", label="true number of targets")
+        ax.set_ylabel(label)
+        ax.set_ylim(bottom=0)
+        ax.legend(fontsize=7, loc="best")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()

@@ -1,7 +1,8 @@
 """A recorded run read back from its MCAP log: the inputs of evaluation and plots.
 
 :func:`load_run` reads, from a log written by the recorder (``run_swarm.sh`` or
-``record.sh CONFIG``), everything a step's picture and score need except the PHD itself:
+``record.sh CONFIG``), everything a step's picture and score need except what the team
+estimate is made of (below):
 
 - the run's configuration (the ``phd_swarm.config`` metadata, or a config file);
 - per step: the true targets (``/world/truth``), the team state (``/world/robots``: robot
@@ -9,9 +10,18 @@
   (``/robot_<i>/cell``) and scan (``/robot_<i>/measurements``: sensor position and
   measurements), and the live monitor's metrics (``/monitor/metrics``) when recorded.
 
-The robots' PHD windows (``/robot_<i>/density``) are large (the whole map per step), so
-they are not kept: :meth:`RunLog.team_images` streams them and yields one team PHD image per
-step, assembled exactly as the live monitor assembles it (windows added in robot-id order).
+What the team estimate is made of depends on the system (:attr:`RunLog.grid_phd`); it is
+streamed, not kept, so memory stays at a few steps whatever the run's length:
+
+- a grid PHD (Dames, Chen): the robots' PHD windows (``/robot_<i>/density``) are large (the
+  whole map per step); :meth:`RunLog.team_images` yields one team PHD image per step,
+  assembled exactly as the live monitor assembles it (windows added in robot-id order);
+- any other estimator (Sung & Tokekar's GM-PHD): :meth:`RunLog.team_estimates` yields per
+  step the robots' own estimates (``/robot_<i>/estimates``) and, for the estimator's figures,
+  their components and tracks (``components``, ``tracks``), one
+  :class:`~phd_swarm.nodes.gm_convert.EstimatorView` per robot, checked as the monitor
+  checks them (:mod:`phd_swarm.nodes.gm_convert`).
+
 Messages are deserialised with rclpy's C type support (the installed message classes), not
 decoded in Python.
 
@@ -27,7 +37,7 @@ from collections import defaultdict
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import yaml
@@ -36,18 +46,21 @@ from rclpy.serialization import deserialize_message as _rclpy_deserialize
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
 from phd_swarm.core.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
-from phd_swarm.nodes import convert
+from phd_swarm.nodes import convert, gm_convert
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.completeness import reporters
+from phd_swarm.nodes.completeness import monitor_density, reporters, robot_outputs
+from phd_swarm.nodes.monitor import MAX_COMPONENTS
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
+    GaussianMixture,
     MeasurementSet,
     RobotStatus,
     TargetSet,
     TeamMetrics,
     TeamState,
+    TrackSet,
 )
 
 logger = logging.getLogger(__name__)
@@ -90,6 +103,34 @@ class StepRecord:
     monitor: dict[str, float] | None = None
 
 
+class TeamEstimate(NamedTuple):
+    """A step's team estimate for a system whose robots extract their own (not a grid PHD).
+
+    Attributes
+    ----------
+    step : int
+    estimates : np.ndarray, shape (K, 2)
+        The union of the robots' estimates, in robot-id order [m].
+    expected : float
+        The sum of the robots' expected numbers of targets.
+    views : list of EstimatorView
+        Each robot's components and tracks, in robot-id order, for the estimator's
+        ``figures`` hook (empty if the system publishes neither).
+    reporters : tuple of int
+        The robots whose outputs make up the step (every output kind), ascending.
+    """
+
+    step: int
+    estimates: np.ndarray
+    expected: float
+    views: list[gm_convert.EstimatorView]
+    reporters: tuple[int, ...]
+
+
+#: Output kinds a non-grid step is made of, and their message classes.
+_ESTIMATE_TYPES = {"estimates": TargetSet, "components": GaussianMixture, "tracks": TrackSet}
+
+
 @dataclass
 class RunLog:
     """A run read from its log (see the module docstring).
@@ -120,6 +161,33 @@ class RunLog:
     def controller(self) -> str:
         """The robots' controller (``phd``, ``uniform``, ``chen_p``, ``chen_o``, ...)."""
         return self.config.scenario.system.controller
+
+    @property
+    def grid_phd(self) -> bool:
+        """Whether the team estimate is a grid PHD image (the monitor's rule), not the robots'."""
+        return monitor_density(self.scenario.system)
+
+    @property
+    def step_inputs(self) -> tuple[str, ...]:
+        """The robot output kinds a step is made of, as the monitor waits for them.
+
+        ``("density",)`` for a grid PHD; else ``estimates`` and those of ``components`` and
+        ``tracks`` the system's robots publish.
+        """
+        if self.grid_phd:
+            return ("density",)
+        outputs = robot_outputs(self.scenario.system)
+        return tuple(k for k in _ESTIMATE_TYPES if k in outputs)
+
+    def paths(self) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Each robot's path: its steps (S,) and positions (S, 2) in the team states."""
+        out: dict[int, tuple[list[int], list[np.ndarray]]] = defaultdict(lambda: ([], []))
+        for k, rec in self.steps.items():
+            for rid, q in rec.robots.items():
+                out[rid][0].append(k)
+                out[rid][1].append(q)
+        return {rid: (np.array(ks, dtype=np.int64), np.array(qs).reshape(-1, 2))
+                for rid, (ks, qs) in sorted(out.items())}
 
     def team_images(self, steps: Iterable[int] | None = None
                     ) -> Iterator[tuple[int, np.ndarray, int]]:
@@ -166,6 +234,61 @@ class RunLog:
             if pending[k]:
                 yield assemble(k)
 
+    def team_estimates(self, steps: Iterable[int] | None = None) -> Iterator[TeamEstimate]:
+        """Yield the :class:`TeamEstimate` of each step, for a system without a grid PHD.
+
+        A robot reports step k when its every output kind (:attr:`step_inputs`) of step k
+        has been read; a step is complete when every robot alive at k and k+1 reported (the
+        monitor's rule); the rest are yielded at the end of the log, with the robots that
+        reported. Estimates are joined and expected counts added in robot-id order, as the
+        monitor does, so the step scores to the monitor's numbers bit for bit.
+
+        Raises
+        ------
+        LogError
+            Naming the topic and step, if a message fails the monitor's checks (non-finite
+            positions or expected count, mixtures or tracks that
+            :mod:`~phd_swarm.nodes.gm_convert` refuses).
+        """
+        wanted = None if steps is None else set(steps)
+        kinds = self.step_inputs
+        topics = {T.robot_topic(r, kind): (r, kind) for r in range(self.scenario.robots)
+                  for kind in kinds}
+        pending: dict[int, dict[int, dict[str, Any]]] = defaultdict(lambda: defaultdict(dict))
+        done: set[int] = set()
+
+        def reported(k: int) -> set[int]:
+            return {r for r, got in pending[k].items() if len(got) == len(kinds)}
+
+        with open_log(self.path) as log:
+            for rec in log.messages(list(topics), decode=False):
+                rid, kind = topics[rec.topic]
+                msg = deserialize(rec, _ESTIMATE_TYPES[kind], self.path)
+                k = int(msg.step)
+                if k not in self.steps or k in done or (wanted is not None and k not in wanted):
+                    continue
+                pending[k][rid][kind] = self._checked(rec.topic, kind, msg)
+                if reported(k) >= self.expected_windows(k):
+                    done.add(k)
+                    yield _team_estimate(k, pending.pop(k), kinds)
+        for k in sorted(pending):
+            got = {r: pending[k][r] for r in sorted(reported(k))}
+            if got:
+                yield _team_estimate(k, got, kinds)
+
+    def _checked(self, topic: str, kind: str, msg: Any) -> Any:
+        """A robot output as arrays, checked as the monitor checks it; LogError otherwise."""
+        try:
+            if kind == "estimates":
+                return (convert.target_positions(msg),
+                        convert.finite(msg.expected_cardinality, "expected_cardinality",
+                                       low=0.0))
+            if kind == "components":
+                return gm_convert.mixture_from_ros(msg, MAX_COMPONENTS)
+            return gm_convert.tracks_from_ros(msg, MAX_COMPONENTS)
+        except convert.InvalidMessage as exc:
+            raise LogError(f"{self.path}: {topic} at step {int(msg.step)}: {exc}") from None
+
     def expected_windows(self, k: int) -> frozenset[int]:
         """Robots whose windows make up step k: alive at k and at k+1 (the monitor's rule)."""
         later = self.steps.get(k + 1)
@@ -197,6 +320,24 @@ class RunLog:
             if k in wanted:
                 out[k] = cumulative_weight(alpha, count, mode).reshape(grid.shape)
         return out
+
+
+def _team_estimate(k: int, robots: dict[int, dict[str, Any]], kinds: tuple[str, ...]
+                   ) -> TeamEstimate:
+    """Join the checked outputs ``robots`` (robot -> kind -> arrays) of step k, by robot id.
+
+    Only the robots with every output kind count (the monitor's rule).
+    """
+    ids = tuple(r for r in sorted(robots) if len(robots[r]) == len(kinds))
+    points, expected = [], 0.0
+    for rid in ids:
+        positions, count = robots[rid]["estimates"]
+        points.append(positions)
+        expected += count
+    views = ([gm_convert.EstimatorView(robots[r]["components"], robots[r]["tracks"])
+              for r in ids] if {"components", "tracks"} <= set(kinds) else [])
+    estimates = np.concatenate(points) if points else np.empty((0, 2))
+    return TeamEstimate(k, estimates, expected, views, ids)
 
 
 def config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfig:
