@@ -267,6 +267,11 @@ def save_series(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "
     a2.set_ylim(bottom=0)
     a2.legend(fontsize=8, loc="lower right")
     a2.grid(alpha=0.3)
+    return _save(fig, path, title)
+
+
+def _save(fig: Any, path: str | Path, title: str) -> Path:
+    """Title ``fig`` (if ``title``), lay it out, write it to ``path`` as a PNG and close it."""
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
@@ -318,9 +323,4 @@ def save_figures(rows: Sequence[dict[str, Any]], path: str | Path, title: str = 
         ax.legend(fontsize=7, loc="best")
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("time [s]")
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path, title)

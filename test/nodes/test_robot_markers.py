@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from builtin_interfaces.msg import Time
 from rclpy.serialization import deserialize_message, serialize_message
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -19,8 +18,9 @@ from phd_swarm.nodes.robot_markers import (
     ellipse_vertices,
 )
 
-STAMP = Time(sec=12, nanosec=500_000_000)
-FRAME = "map"
+from .test_markers import FRAME, STAMP
+from .test_markers import check_common as check_shared
+
 NAMESPACES = ["robot_3/robot", "robot_3/fov", "robot_3/components", "robot_3/targets",
               "robot_3/path"]
 
@@ -46,13 +46,9 @@ def alpha(colours) -> np.ndarray:
 
 
 def check_common(array: MarkerArray) -> None:
-    keys = [(m.ns, m.id) for m in array.markers]
-    assert len(keys) == len(set(keys)), "marker (ns, id) pairs must be unique"
+    check_shared(array)  # unique ids, frame, stamp, actions, z = 0, serialisable
     for m in array.markers:
-        assert m.header.frame_id == FRAME
-        assert (m.header.stamp.sec, m.header.stamp.nanosec) == (12, 500_000_000)
-        assert m.action in (Marker.ADD, Marker.DELETE)
-        assert m.pose.position.z == 0.0 and all(p.z == 0.0 for p in m.points)
+        assert m.pose.position.z == 0.0
         assert all(np.isfinite([p.x, p.y]).all() for p in m.points)
         assert not m.colors or len(m.colors) == len(m.points)
     back = deserialize_message(serialize_message(array), MarkerArray)

@@ -45,20 +45,31 @@ def _copy_log(src: Path, dst: Path, chunk_size: int = 1 << 20, metadata: bool = 
     return dst
 
 
-def _copy_without(src: Path, dst: Path, drop) -> Path:
-    """Rewrite ``src`` into ``dst`` without the messages ``drop(topic, step)`` selects."""
+def _copy_rewriting(src: Path, dst: Path, rewrite, completeness: bool = True) -> Path:
+    """Rewrite ``src`` into ``dst`` message by message.
+
+    ``rewrite(topic, step, data)`` gives the bytes to write, or None to drop the message;
+    without ``completeness`` the recorder's report is left out (as if it had been killed).
+    """
     with open_log(src) as log:
         meta = log.metadata()
         dt = log_config(src).scenario.dt
         with LogWriter(dst) as out:
             for name, data in meta.items():
-                if name != "phd_swarm.completeness":   # as if the recorder had been killed
+                if completeness or name != "phd_swarm.completeness":
                     out.add_metadata(name, data)
             for rec in log.messages(decode=False):
                 out.add_channel(rec.topic, rec.ros_type)
-                if not drop(rec.topic, step_of(rec.publish_time_ns, dt)):
-                    out.write(rec.topic, rec.data, rec.log_time_ns, rec.publish_time_ns)
+                data = rewrite(rec.topic, step_of(rec.publish_time_ns, dt), rec.data)
+                if data is not None:
+                    out.write(rec.topic, data, rec.log_time_ns, rec.publish_time_ns)
     return dst
+
+
+def _copy_without(src: Path, dst: Path, drop) -> Path:
+    """Rewrite ``src`` into ``dst`` without the messages ``drop(topic, step)`` selects."""
+    return _copy_rewriting(src, dst, lambda topic, step, data: None if drop(topic, step)
+                           else data, completeness=False)
 
 
 def log_config(path: Path):
@@ -252,16 +263,9 @@ def test_a_message_of_another_definition_is_a_clear_error(recorded_run, tmp_path
     Here robot 1's statuses are cut short, as an older, shorter RobotStatus would be; the
     log's completeness still reads.
     """
-    src, dst = recorded_run / "run.mcap", tmp_path / "old.mcap"
-    with open_log(src) as log:
-        meta = log.metadata()
-        with LogWriter(dst) as out:
-            for name, data in meta.items():
-                out.add_metadata(name, data)
-            for rec in log.messages(decode=False):
-                out.add_channel(rec.topic, rec.ros_type)
-                data = rec.data[:40] if rec.topic == "/robot_1/status" else rec.data
-                out.write(rec.topic, data, rec.log_time_ns, rec.publish_time_ns)
+    dst = _copy_rewriting(recorded_run / "run.mcap", tmp_path / "old.mcap",
+                          lambda topic, step, data: data[:40] if topic == "/robot_1/status"
+                          else data)
     res = _evaluate(str(dst), "--no-plots", "--out", str(tmp_path / "eval"))
     assert res.returncode == 1 and "Traceback" not in res.stderr
     assert "RobotStatus message on /robot_1/status does not fit the installed" in res.stderr

@@ -18,15 +18,13 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from phd_swarm.core.estimators.sung_figures import FIGURES
 from phd_swarm.core.scoring import score_estimates
-from phd_swarm.logs.mcap_log import LogWriter, open_log
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.completeness import step_of
 from phd_swarm.tools.evaluate import COLUMNS
 from phd_swarm.tools.run_log import load_run
 from phd_swarm_msgs.msg import GaussianMixture
 
 from .conftest import SUNG_RECORDED
-from .test_evaluate import _copy_without, _evaluate, _is_png, log_config
+from .test_evaluate import _copy_rewriting, _copy_without, _evaluate, _is_png
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -85,25 +83,14 @@ def test_series_has_the_figures_and_the_pictures_are_drawn(evaluated):
 
 
 def _copy_spoiling(src: Path, dst: Path, topic: str, step: int, spoil) -> Path:
-    """Rewrite ``src`` into ``dst`` with ``spoil(msg)`` applied to ``topic``'s step message.
-
-    As :func:`test_evaluate._copy_without`, but the message is changed, not dropped.
-    """
-    dt = log_config(src).scenario.dt
-    with open_log(src) as log:
-        meta = log.metadata()
-        with LogWriter(dst) as out:
-            for name, data in meta.items():
-                out.add_metadata(name, data)
-            for rec in log.messages(decode=False):
-                out.add_channel(rec.topic, rec.ros_type)
-                data = rec.data
-                if rec.topic == topic and step_of(rec.publish_time_ns, dt) == step:
-                    msg = deserialize_message(data, GaussianMixture)
-                    spoil(msg)
-                    data = serialize_message(msg)
-                out.write(rec.topic, data, rec.log_time_ns, rec.publish_time_ns)
-    return dst
+    """Rewrite ``src`` into ``dst`` with ``spoil(msg)`` applied to ``topic``'s step message."""
+    def rewrite(name: str, k: int, data: bytes) -> bytes:
+        if name != topic or k != step:
+            return data
+        msg = deserialize_message(data, GaussianMixture)
+        spoil(msg)
+        return serialize_message(msg)
+    return _copy_rewriting(src, dst, rewrite)
 
 
 def test_a_spoiled_components_message_is_a_clear_error(sung_run, tmp_path):
