@@ -118,6 +118,11 @@ class Agent:
         self.estimator = team.make("estimator", robot_id)
         self.controller = team.make("controller", robot_id)
         self.rng = robot_generator(team.scenario.seed, robot_id)
+        # An exchange that carries the estimator's state (Shirsat & Berman's reward sets)
+        # is handed the estimator once.
+        bind = getattr(self.exchange, "bind_estimator", None)
+        if bind is not None:
+            bind(self.estimator)
         self._view = team.parts["exchange"].extras.get("view", lambda exchange: None)
         #: Whether this agent runs the estimator, or the exchange does (Dames' grid PHD).
         self._runs_estimator = not team.parts["estimator"].extras.get("runs_in_exchange")

@@ -50,7 +50,8 @@ ROBOT_OUTPUTS = ("status", "goal", "estimates")
 
 #: Robot step topics that a capability of the system's parts brings: (role, capability).
 OUTPUT_OF = {"density": ("estimator", "grid_density"), "cell": ("exchange", "cell"),
-             "components": ("estimator", "gaussian_mixture"), "tracks": ("estimator", "tracks")}
+             "components": ("estimator", "gaussian_mixture"), "tracks": ("estimator", "tracks"),
+             "reward_set": ("estimator", "reward_set")}
 
 #: Topics of an optional node: absent rather than missing when none holds a message.
 OPTIONAL_PREFIX = "/monitor/"

@@ -127,21 +127,35 @@ def _check_covs(covs: np.ndarray, field: str) -> None:
 class EstimatorView:
     """A robot's estimator as its messages show it, for an estimator part's ``figures`` hook.
 
-    It has what the hook reads: ``mixture.weights``, ``targets()``, ``confirmed_mask()``.
-    The monitor and the log readers compute Sung & Tokekar's figures
-    (:func:`phd_swarm.core.estimators.sung_figures.step_figures`) from a robot's
-    ``components`` and ``tracks`` with it, as the in-memory engine does from the estimator.
+    It has what the hooks read: ``mixture.weights``, ``targets()`` and ``confirmed_mask()``
+    (with tracks), ``reward_set()`` (with a reward set). The monitor and the log readers
+    compute a system's figures (e.g.
+    :func:`phd_swarm.core.estimators.sung_figures.step_figures`) from a robot's
+    ``components``, ``tracks`` and ``reward_set`` with it, as the in-memory engine does from
+    the estimator.
     """
 
-    def __init__(self, mixture: MixtureArrays, tracks: TrackArrays) -> None:
+    def __init__(self, mixture: MixtureArrays, tracks: TrackArrays | None = None,
+                 rewards: np.ndarray | None = None) -> None:
         self.mixture = mixture
         self.tracks = tracks
+        self.rewards = rewards
 
     def targets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Positions (N, 2), covariances (N, 2, 2), weights (N,) and track ids (N,)."""
-        t = self.tracks
+        t = self._need(self.tracks, "tracks")
         return t.positions, t.covs, t.weights, t.track_ids
 
     def confirmed_mask(self) -> np.ndarray:
         """Which targets are on a confirmed track, (N,) bool."""
-        return self.tracks.confirmed
+        return self._need(self.tracks, "tracks").confirmed
+
+    def reward_set(self) -> np.ndarray:
+        """The reward set M_k (K, 2) [m]."""
+        return self._need(self.rewards, "reward_set")
+
+    @staticmethod
+    def _need(value, what: str):
+        if value is None:
+            raise AttributeError(f"the robot published no {what}")
+        return value

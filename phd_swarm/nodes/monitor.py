@@ -44,12 +44,14 @@ from phd_swarm.core.scoring import score_estimates, score_step, series_summary
 from phd_swarm.nodes import completeness, convert, gm_convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers
+from phd_swarm.nodes.meet_merge_wire import reward_points
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
     GaussianMixture,
+    RewardSet,
     RobotStatus,
     TargetSet,
     TeamMetrics,
@@ -103,7 +105,8 @@ class MonitorNode(Node):
         #: components and tracks the figures hook reads).
         outputs = completeness.robot_outputs(self.scenario.system)
         self.inputs = (("density",) if self.grid_phd else
-                       tuple(k for k in ("estimates", "components", "tracks") if k in outputs))
+                       tuple(k for k in ("estimates", "components", "tracks", "reward_set")
+                             if k in outputs))
         part = self.scenario.system.parts()["estimator"]
         self.figures_hook = (None if self.grid_phd else part.extras.get("figures"))
         #: Names of the figures the hook returned (row keys of :attr:`series`).
@@ -137,7 +140,7 @@ class MonitorNode(Node):
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
         types = {"density": DensityGrid, "estimates": TargetSet,
-                 "components": GaussianMixture, "tracks": TrackSet}
+                 "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet}
         for r in ids:
             for kind in self.inputs:
                 self.create_subscription(types[kind], T.robot_topic(r, kind),
@@ -293,10 +296,8 @@ class MonitorNode(Node):
                 points.append(convert.target_positions(got["estimates"]))
                 expected += convert.finite(got["estimates"].expected_cardinality,
                                            "expected_cardinality", low=0.0)
-                if "components" in got and "tracks" in got:
-                    views.append(gm_convert.EstimatorView(
-                        gm_convert.mixture_from_ros(got["components"], MAX_COMPONENTS),
-                        gm_convert.tracks_from_ros(got["tracks"], MAX_COMPONENTS)))
+                if "components" in got:
+                    views.append(estimator_view(got))
             except convert.InvalidMessage as exc:
                 self._reject(f"outputs of robot {rid} at step {k}: {exc}")
         estimates = np.concatenate(points) if points else np.empty((0, 2))
@@ -379,6 +380,19 @@ class MonitorNode(Node):
             for pub in (self.metrics_pub, self.estimates_pub):
                 pub.wait_for_all_acked(Duration(seconds=5.0))
             self.finished = True
+
+
+def estimator_view(got: dict[str, Any]) -> gm_convert.EstimatorView:
+    """A robot's step outputs as the view a ``figures`` hook reads.
+
+    ``components`` and, if the robot publishes them, ``tracks`` and ``reward_set``;
+    InvalidMessage if one is bad.
+    """
+    return gm_convert.EstimatorView(
+        gm_convert.mixture_from_ros(got["components"], MAX_COMPONENTS),
+        gm_convert.tracks_from_ros(got["tracks"], MAX_COMPONENTS) if "tracks" in got
+        else None,
+        reward_points(got["reward_set"]) if "reward_set" in got else None)
 
 
 def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, float | None]:

@@ -15,6 +15,8 @@ topic            type                        when the system's ...
                                              Layers 2-3)
 ``markers``      ``MarkerArray``             estimator provides ``gaussian_mixture``
                                              (ellipses, tracks, FoV, path; not a step topic)
+``reward_set``   ``RewardSet``               estimator provides ``reward_set`` (Shirsat &
+                                             Berman M_k, with the robots met at the step)
 ===============  ==========================  ============================================
 
 The estimates are the estimator's own (``estimates()``), or for a grid PHD that the exchange
@@ -34,12 +36,20 @@ from phd_swarm.core.agent import Agent
 from phd_swarm.core.controllers.base import Decision
 from phd_swarm.nodes import convert, gm_convert
 from phd_swarm.nodes.completeness import robot_outputs
+from phd_swarm.nodes.meet_merge_wire import reward_set
 from phd_swarm.nodes.qos import publisher_qos
-from phd_swarm_msgs.msg import CellPolygon, DensityGrid, GaussianMixture, TargetSet, TrackSet
+from phd_swarm_msgs.msg import (
+    CellPolygon,
+    DensityGrid,
+    GaussianMixture,
+    RewardSet,
+    TargetSet,
+    TrackSet,
+)
 
 #: ROS type of each step output a capability brings (goal and status are the node's).
 TYPES = {"density": DensityGrid, "cell": CellPolygon, "estimates": TargetSet,
-         "components": GaussianMixture, "tracks": TrackSet}
+         "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet}
 
 
 class RobotOutputs:
@@ -116,6 +126,10 @@ class RobotOutputs:
             tracks = track_arrays(est)
             self.pubs["tracks"].publish(gm_convert.track_set(self.robot_id, k, tracks,
                                                              self.dt, self.frame_id))
+        if "reward_set" in self.pubs:
+            self.pubs["reward_set"].publish(reward_set(
+                self.robot_id, k, est.reward_set(), self.dt, self.frame_id,
+                getattr(ex, "met", ())))
         if self.markers is not None:
             self.markers_pub.publish(self.markers.build(
                 convert.stamp(k, self.dt), self.agent.position, mixture, tracks,

@@ -6,11 +6,12 @@ inside their namespace; :func:`robot_topic` gives the absolute name for robot ``
 world, the monitor, the recorder and peers address a robot's topics that way).
 
 Protocol traffic goes to the receiver's *inbox*: robot ``j`` publishes a message addressed
-to robot ``i`` on ``/robot_<i>/inbox/<kind>``, so a robot subscribes to six topics whatever
-the team size and receives exactly the messages addressed to it (O(neighbours) per step).
-Inbox topics are reliable and transient-local on the writer side with a short history, so
-that a message written by a publisher created a moment ago (a new contact) still reaches the
-inbox once the two match; readers keep a deep queue so a burst is never overwritten.
+to robot ``i`` on ``/robot_<i>/inbox/<kind>``, so a robot subscribes to its exchange's inbox
+kinds (six for Dames', ``rewards`` for Shirsat & Berman's meet-and-merge) whatever the team
+size and receives exactly the messages addressed to it (O(neighbours) per step). Inbox
+topics are reliable and transient-local on the writer side with a short history, so that a
+message written by a publisher created a moment ago (a new contact) still reaches the inbox
+once the two match; readers keep a deep queue so a burst is never overwritten.
 
 The table is rclpy-free on purpose (QoS as names of :mod:`phd_swarm.nodes.qos` profiles) so
 that tools and docs can read it without ROS.
@@ -40,6 +41,7 @@ INBOX = {
     "eta_partial": "phd_swarm_msgs/msg/EtaPartial",
     "eta_total": "phd_swarm_msgs/msg/EtaTotal",
     "particles": "phd_swarm_msgs/msg/ParticleTransfer",
+    "rewards": "phd_swarm_msgs/msg/RewardSet",
 }
 
 
@@ -85,6 +87,8 @@ ROBOT_TOPICS = {
                "once per step (estimators with tracks)"),
     "markers": ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "robot",
                 "once per step (Gaussian-mixture estimators)"),
+    "reward_set": ("phd_swarm_msgs/msg/RewardSet", "STEP", "robot",
+                   "once per step (estimators with reward sets)"),
     **{f"inbox/{kind}": (typ, "INBOX", "peers", "per protocol step, from contacts")
        for kind, typ in INBOX.items()},
 }

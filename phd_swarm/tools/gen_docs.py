@@ -77,6 +77,12 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("tracks"): "The robot's targets with their track ids, life "
                                     "lengths, confirmed flags, weights and covariances "
                                     "(Sung & Tokekar Sec. V-E, V-F).",
+    ROBOT_PATTERN.format("reward_set"): "The robot's reward set M_k (targets extracted so "
+                                        "far, merged with those of the robots met) and the "
+                                        "robots met at step k (Shirsat & Berman eq. 6).",
+    ROBOT_PATTERN.format("inbox/rewards"): "The reward set of a robot on the same node (or "
+                                           "in radio range), sent at a renewal epoch "
+                                           "(Shirsat & Berman Alg. 2-3).",
     ROBOT_PATTERN.format("markers"): "Covariance ellipses, targets and confirmed track ids, "
                                      "field of view and planned path, for RViz2 / Foxglove "
                                      "(`robot_markers.RobotMarkers`).",

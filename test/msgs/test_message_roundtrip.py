@@ -18,6 +18,7 @@ from phd_swarm_msgs.msg import (
     GaussianMixture,
     MeasurementSet,
     ParticleTransfer,
+    RewardSet,
     RobotState,
     RobotStatus,
     TargetSet,
@@ -79,6 +80,8 @@ EXAMPLES = [
     TrackSet(header=_header(15), source_id=0, step=15, track_ids=[0, 7], life=[3, 1],
              confirmed=[True, False], weights=[0.98, 0.5], positions=_points(2, 12.0),
              covariances=[1.0, 0.25, 0.25, 2.0, 3.0, 0.0, 0.0, 3.0]),
+    RewardSet(header=_header(16), source_id=4, step=16, met_ids=[1, 7],
+              positions=_points(3, 1.25)),
 ]
 
 

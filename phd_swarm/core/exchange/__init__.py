@@ -2,7 +2,8 @@
 
 :mod:`.base` is the role (:class:`~.base.Exchange`, :class:`~.base.Envelope`); :mod:`.faults`
 injects lossy links into any exchange's traffic; :mod:`.voronoi_phd` is Dames' exchange,
-:mod:`.none` the exchange of a robot alone.
+:mod:`.none` the exchange of a robot alone, :mod:`.meet_merge` Shirsat & Berman's exchange of
+reward sets between robots that meet (who meets whom: :mod:`.radio`).
 """
 
-from . import none, voronoi_phd  # noqa: F401  (registration)
+from . import meet_merge, none, voronoi_phd  # noqa: F401  (registration)

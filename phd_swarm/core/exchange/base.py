@@ -5,7 +5,9 @@ hands it the world's membership and the robot's scan, feeds it the messages that
 a tick for every round (tick period) without news, and sends the :class:`Envelope` s it
 returns; the in-memory engine delivers them through a queue, the ROS robot node publishes
 them on the receivers' inbox topics (:mod:`phd_swarm.nodes.wire`). A robot's exchange is
-done with a step when :attr:`Exchange.done`.
+done with a step when :attr:`Exchange.done`. An exchange that carries the estimator's own
+state (Shirsat & Berman's reward sets) has a ``bind_estimator(estimator)`` method, which
+the agent calls once with the robot's estimator.
 """
 
 from __future__ import annotations
