@@ -67,6 +67,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     out: dict[str, Any] = {"preset": _PRESET_OF_KIND[scenario.targets.kind]}
     for f in dataclasses.fields(scenario):
         value = plain(getattr(scenario, f.name))
+        if value is None:  # an optional field left unset (robot_start_grid)
+            continue
         if isinstance(value, dict):
             value = {k: v for k, v in value.items() if v is not None and v != []}
         out[f.name] = value

@@ -279,6 +279,8 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
     # hashes of those results stay valid.
     if scenario.targets.kind != "turning_walk":
         fields["targets"].pop("turn_every")
+    if scenario.robot_start_grid is None:
+        fields.pop("robot_start_grid")
     doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
     try:

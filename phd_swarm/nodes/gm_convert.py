@@ -136,10 +136,13 @@ class EstimatorView:
     """
 
     def __init__(self, mixture: MixtureArrays, tracks: TrackArrays | None = None,
-                 rewards: np.ndarray | None = None) -> None:
+                 rewards: np.ndarray | None = None,
+                 met: np.ndarray | None = None) -> None:
         self.mixture = mixture
         self.tracks = tracks
         self.rewards = rewards
+        #: The robots whose reward sets were merged at the step (``reward_set.met_ids``).
+        self.met = np.empty(0, dtype=np.int64) if met is None else met
 
     def targets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Positions (N, 2), covariances (N, 2, 2), weights (N,) and track ids (N,)."""

@@ -392,7 +392,9 @@ def estimator_view(got: dict[str, Any]) -> gm_convert.EstimatorView:
         gm_convert.mixture_from_ros(got["components"], MAX_COMPONENTS),
         gm_convert.tracks_from_ros(got["tracks"], MAX_COMPONENTS) if "tracks" in got
         else None,
-        reward_points(got["reward_set"]) if "reward_set" in got else None)
+        reward_points(got["reward_set"]) if "reward_set" in got else None,
+        np.array(got["reward_set"].met_ids, dtype=np.int64) if "reward_set" in got
+        else np.empty(0, dtype=np.int64))
 
 
 def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, float | None]:

@@ -23,6 +23,7 @@ import numpy as np
 from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.grid_graph import lattice_count, lattice_range
 from phd_swarm.core.models import PhdModels
 from phd_swarm.core.params import (
     expect_bool,
@@ -192,6 +193,13 @@ class Scenario:
     system : SystemConfig
         The parts the robots run (sensor, estimator, exchange, controller) and their
         options (:mod:`phd_swarm.core.system`); default: Dames' PHD-weighted Lloyd.
+    robot_start_grid : float or None
+        If set, the spacing [m] of a square grid of nodes anchored at E's (xmin, ymin)
+        corner (:class:`~phd_swarm.core.grid_graph.GridGraph`), and each robot starts on a
+        node drawn uniformly among those inside ``robot_start_box`` (two robots may share
+        one): Shirsat & Berman's robots "start at random positions on the grid" (Sec. VI);
+        set it to the ``dtds_walk`` controller's ``grid_spacing``. None (default): robots
+        start uniformly in the box.
     """
 
     name: str
@@ -209,6 +217,7 @@ class Scenario:
     ospa_p: float = 1.0
     seed: int = 0
     system: SystemConfig = field(default_factory=SystemConfig)
+    robot_start_grid: float | None = None
 
     def __post_init__(self) -> None:
         expect_str(self.name, "name", nonempty=True)
@@ -247,6 +256,34 @@ class Scenario:
         expect_int(self.seed, "seed", low=0)
         if not isinstance(self.system, SystemConfig):
             raise ValueError(f"system must be a SystemConfig, got {type(self.system).__name__}")
+        if self.robot_start_grid is not None:
+            g = expect_number(self.robot_start_grid, "robot_start_grid", low=0.0, strict=True)
+            object.__setattr__(self, "robot_start_grid", g)
+            (x0, x1), (y0, y1) = self.start_grid_ranges()
+            if x0 > x1 or y0 > y1:
+                raise ValueError(
+                    f"robot_start_grid: no node of the {g:g} m grid anchored at "
+                    f"({self.env.xmin:g}, {self.env.ymin:g}) lies in robot_start_box {box}")
+
+    def start_grid_ranges(self) -> tuple[tuple[int, int], tuple[int, int]]:
+        """Node indices (first, last) along x and y of the start grid inside the start box.
+
+        The nodes are ``(env.xmin + i g, env.ymin + j g)``, g = :attr:`robot_start_grid`,
+        over E (those of :class:`~phd_swarm.core.grid_graph.GridGraph` with that spacing);
+        a range is empty (first > last) if no node lies in the box.
+
+        Raises
+        ------
+        ValueError
+            If :attr:`robot_start_grid` is None.
+        """
+        if self.robot_start_grid is None:
+            raise ValueError("start_grid_ranges: robot_start_grid is not set")
+        g, env, box = float(self.robot_start_grid), self.env, self.robot_start_box
+        return (lattice_range(env.xmin, g, lattice_count(env.xmin, env.xmax, g), box[0],
+                              box[2]),
+                lattice_range(env.ymin, g, lattice_count(env.ymin, env.ymax, g), box[1],
+                              box[3]))
 
     @property
     def steps(self) -> int:
@@ -380,6 +417,11 @@ PRESETS: dict[str, Callable[[], Scenario]] = {
     "chen_clustered": chen_clustered, "sung_tokekar": sung_tokekar}
 
 
+def _optional_number(value: Any, path: str) -> float | None:
+    """None (the field unset), or a number."""
+    return None if value is None else expect_number(value, path)
+
+
 # Value parsers of scenario_from_dict: (value, key path) -> the field's value, converted (a
 # float for a number); the ranges are checked by the dataclasses.
 _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
@@ -393,7 +435,7 @@ _SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "duration": expect_number, "robots": expect_int, "robot_start_box": expect_box,
     "robot_max_speed": expect_number, "extraction_threshold": expect_number,
     "ospa_c": expect_number, "ospa_p": partial(expect_number, allow_inf=True),
-    "seed": expect_int}
+    "seed": expect_int, "robot_start_grid": _optional_number}
 
 _MODEL_PARTS = ("detection", "measurement", "clutter", "motion", "survival", "birth")
 

@@ -14,7 +14,8 @@ One time step k of a run (Dames 2020 Sec. II-C and IV; Chen et al. 2021 Alg. 1):
 Random streams. Three independent generators are derived from the scenario's seed with
 ``np.random.SeedSequence(seed).spawn(3)``, in this order:
 
-0. robot start positions (one ``random((R, 2))`` call at construction);
+0. robot start positions (one ``random((R, 2))`` call at construction, or, with the
+   scenario's ``robot_start_grid``, one ``integers`` call for the (R, 2) node indices);
 1. targets (the initial population, then every :meth:`World.advance`);
 2. the sensor (every :meth:`World.scans`, robots in id order).
 
@@ -35,6 +36,23 @@ from phd_swarm.sim.targets import Targets, make_targets
 
 #: Order of the child streams spawned from the scenario seed.
 STREAMS = ("robot_starts", "targets", "sensor")
+
+
+def start_positions(scenario: Scenario, rng: np.random.Generator) -> np.ndarray:
+    """The robots' start positions q^0, shape (R, 2) [m], drawn from ``rng``.
+
+    Uniform in ``scenario.robot_start_box``; with ``scenario.robot_start_grid`` = g,
+    uniform among the nodes ``(env.xmin + i g, env.ymin + j g)`` inside the box (the
+    nodes of :class:`~phd_swarm.core.grid_graph.GridGraph` with spacing g, to the bit),
+    independently per robot (Shirsat & Berman Sec. VI).
+    """
+    if scenario.robot_start_grid is None:
+        box = np.asarray(scenario.robot_start_box, dtype=float)
+        return box[:2] + rng.random((scenario.robots, 2)) * (box[2:] - box[:2])
+    (x0, x1), (y0, y1) = scenario.start_grid_ranges()
+    index = rng.integers([x0, y0], [x1 + 1, y1 + 1], size=(scenario.robots, 2))
+    origin = np.array([scenario.env.xmin, scenario.env.ymin], dtype=float)
+    return origin + index * float(scenario.robot_start_grid)
 
 
 class World:
@@ -67,8 +85,7 @@ class World:
         else:
             streams = rng.spawn(len(STREAMS))
         start_rng, self._target_rng, self._sensor_rng = streams
-        box = np.asarray(scenario.robot_start_box, dtype=float)
-        self._positions = box[:2] + start_rng.random((scenario.robots, 2)) * (box[2:] - box[:2])
+        self._positions = start_positions(scenario, start_rng)
         self._alive = np.ones(scenario.robots, dtype=bool)
         self._d_step = step_length(scenario.robot_max_speed, scenario.dt)
         self._lo = np.array([scenario.env.xmin, scenario.env.ymin])

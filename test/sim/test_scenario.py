@@ -213,3 +213,40 @@ def test_extraction_keeps_its_window_and_threshold_in_metres():
         assert s.extraction.bin_threshold(s.grid) == pytest.approx(0.05 * res ** 2)
     s = dames_static()
     assert (s.extraction.window_bins(s.grid), s.extraction.bin_threshold(s.grid)) == (3, 0.05)
+
+
+def test_robot_start_grid_is_optional_validated_and_read_from_the_config():
+    assert dames_static().robot_start_grid is None
+    s = scenario_from_dict({"preset": "dames_static", "robot_start_grid": 2,
+                            "robot_start_box": [0, 0, 10, 10]})
+    assert s.robot_start_grid == 2.0 and isinstance(s.robot_start_grid, float)
+    assert s.start_grid_ranges() == ((0, 5), (0, 5))
+    assert scenario_from_dict({"preset": "dames_static", "robot_start_grid": None}) == \
+        dames_static()
+    for bad, message in ((0.0, "expected a number > 0"), (-1.0, "expected a number > 0"),
+                         (math.inf, "expected a finite number"),
+                         (math.nan, "expected a finite number"),
+                         ("1", "expected a number"), (True, "expected a number")):
+        with pytest.raises(ValueError, match=rf"cfg\.yaml: robot_start_grid: {message}"):
+            scenario_from_dict({"preset": "dames_static", "robot_start_grid": bad},
+                               where="cfg.yaml")
+    # The start box (40..60 x 0..10) holds no node of a 35 m grid anchored at (0, 0) in x.
+    with pytest.raises(ValueError, match="robot_start_grid: no node of the 35 m grid"):
+        dames_static().with_overrides(robot_start_grid=35.0)
+    with pytest.raises(ValueError, match="robot_start_grid is not set"):
+        dames_static().start_grid_ranges()
+
+
+def test_robot_start_grid_round_trips_and_leaves_existing_config_hashes_alone():
+    from phd_swarm.config import scenario_to_dict
+    from phd_swarm.config.sweep_spec import config_hash
+
+    base = dames_static()
+    on = base.with_overrides(robot_start_grid=1.0)
+    assert "robot_start_grid" not in scenario_to_dict(base)
+    assert scenario_from_dict(scenario_to_dict(on)) == on
+    # A hash of the fields without the new one is what committed results were hashed by.
+    h = config_hash(base, "phd", "ospa", (0.0, 1.0))
+    assert h == config_hash(base.with_overrides(robot_start_grid=None), "phd", "ospa",
+                            (0.0, 1.0))
+    assert config_hash(on, "phd", "ospa", (0.0, 1.0)) != h

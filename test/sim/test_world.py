@@ -163,3 +163,53 @@ def test_advance_moves_targets_and_the_clock():
     short.advance()
     short.advance()
     assert short.done
+
+
+def test_default_starts_are_the_uniform_draw_of_the_start_stream_bit_for_bit():
+    s = dames_static(robots=9).with_overrides(seed=21)
+    assert s.robot_start_grid is None
+    rng = np.random.default_rng(np.random.SeedSequence(21).spawn(3)[0])
+    box = np.asarray(s.robot_start_box)
+    expected = box[:2] + rng.random((9, 2)) * (box[2:] - box[:2])
+    assert np.array_equal(World(s).robot_positions, expected)
+
+
+def test_robots_start_on_grid_nodes_inside_the_box_when_asked():
+    from phd_swarm.core.grid_graph import GridGraph
+
+    s = dames_static(robots=400).with_overrides(robot_start_grid=2.5, seed=4)
+    q = World(s).robot_positions
+    x0, y0, x1, y1 = s.robot_start_box  # 40..60 x 0..10: 9 x 5 nodes at 2.5 m
+    assert np.all((q[:, 0] >= x0) & (q[:, 0] <= x1) & (q[:, 1] >= y0) & (q[:, 1] <= y1))
+    g = GridGraph(s.env.xmin, s.env.ymin, s.env.xmax, s.env.ymax, 2.5)
+    assert np.array_equal(g.positions[g.node_of(q)], q)  # exactly on the walk's nodes
+    nodes, counts = np.unique(g.node_of(q), return_counts=True)
+    assert len(nodes) == 45  # every node of the box is drawn (400 robots, 45 nodes)
+    assert counts.max() < 3 * 400 / 45
+    # Reproducible from the seed, a different seed draws other nodes; the targets' stream
+    # is untouched.
+    assert np.array_equal(World(s).robot_positions, q)
+    assert not np.array_equal(World(s.with_overrides(seed=5)).robot_positions, q)
+    a, b = World(s).truth(), World(s.with_overrides(robot_start_grid=None)).truth()
+    assert np.array_equal(a[1], b[1])
+
+
+def test_a_robot_started_on_the_grid_walks_on_it():
+    from phd_swarm.core.controllers.base import Knowledge
+    from phd_swarm.core.controllers.dtds_walk import DtdsWalk
+    from phd_swarm.core.controllers.dtds_walk import setup as walk_setup
+    from phd_swarm.core.system import SystemConfig
+
+    s = dames_static(robots=3).with_overrides(robot_start_grid=1.0,
+                                              robot_start_box=(0.0, 0.0, 5.0, 5.0))
+    system = SystemConfig(controller="dtds_walk")
+    g = walk_setup(s, system)
+    w = World(s)
+    walks = [DtdsWalk(g) for _ in range(3)]
+    rngs = [np.random.default_rng(r) for r in range(3)]
+    for k in range(30):
+        q = w.robot_positions
+        assert np.array_equal(g.positions[g.node_of(q)], q)
+        w.apply_goals({r: walks[r].decide(Knowledge(r, k, q[r], np.empty((0, 2))),
+                                          rngs[r]).goal for r in range(3)})
+        w.advance()

@@ -1,10 +1,10 @@
-"""New GM-PHD components from the measurements: the two measurement-driven birth rules.
+"""New GM-PHD components: two measurement-driven birth rules and one around the robot.
 
 A fixed birth intensity (Vo & Ma A.3) must cover every place a target can appear; when
-targets can appear anywhere that is wasteful and slow to confirm. Both rules here place the
-new components where the measurements are. The state's first two coordinates are the
-target position [m]; the others (a velocity, say) start at ``other_mean`` with covariance
-``other_cov``.
+targets can appear anywhere that is wasteful and slow to confirm. The first two rules here
+place the new components where the measurements are, the third where the sensor is. The
+state's first two coordinates are the target position [m]; the others (a velocity, say)
+start at ``other_mean`` with covariance ``other_cov``.
 
 - :class:`AdaptiveBirth`, after Ristic, Clark, Vo & Vo (2012), "Adaptive target birth
   intensity for PHD and CPHD filters", IEEE Trans. AES 48(2). The targets are labelled
@@ -24,6 +24,9 @@ target position [m]; the others (a velocity, say) start at ``other_mean`` with c
   new component per measurement of the step, weight 1, mean the measured position,
   covariance the measurement noise R. It overestimates the number of targets (the paper
   says so, Sec. VI-A); it is there to reproduce that paper.
+- :class:`RingBirth`, Shirsat & Berman (Sec. VI, eq. 39-40): the birth intensity of step k,
+  gamma_k, is a few components on a ring of radius r_birth around the robot's position q_k
+  at step k, whatever the measurements.
 
 Where the measurement is not a position (range-bearing), the caller gives the position it
 implies and that position's covariance (``positions``, ``position_covs``): the inverse of
@@ -149,4 +152,93 @@ class PerMeasurementBirth:
                    dim: int) -> GaussianMixture:
         """One component per measurement at its position with its covariance (R)."""
         return place(positions, position_covs, np.full(positions.shape[0], self.weight), dim,
+                     self.other_mean, self.other_cov)
+
+
+#: Shirsat & Berman's angles theta_l of the birth components (eq. 40) [rad].
+RING_ANGLES = (0.25 * np.pi, 0.75 * np.pi, 1.25 * np.pi, 1.75 * np.pi)
+
+
+@dataclass(frozen=True, eq=False)
+class RingBirth:
+    """Shirsat & Berman (Sec. VI, eq. 39-40): births on a ring around the robot.
+
+    ``gamma_k(x) = sum_l w_gamma N(x; mu_l, P_gamma)`` with
+    ``mu_l = q_k + r_birth (cos theta_l, sin theta_l)`` (eq. 40), q_k the robot's position
+    at step k, and ``P_gamma = variance I`` on the position block; the paper has 4
+    components, w_gamma = 0.1, P_gamma = 0.5 I, r_birth = 0.8 r_FoV and theta_l = pi/4,
+    3 pi/4, 5 pi/4, 7 pi/4 ("so that the targets are birthed only near the boundary of the
+    FoV").
+
+    When the births enter: in Vo & Ma the birth intensity gamma_k is part of the predicted
+    intensity of step k (Table I step 1, the paper's eq. 26), updated by the measurements of
+    step k. Here gamma_k depends on q_k, which the filter learns only with the scan of step
+    k (``Scan.sensor``), not at the prediction. The caller therefore adds
+    :meth:`components` of the scan's sensor position to the predicted survivors at the
+    start of the update of step k, before the detection probabilities and the Kalman terms
+    are computed: the sum is exactly v_{k|k-1} of eq. 26 (no spawns), so the births of step
+    k sit around the robot's position of step k and are updated by Z_k, as in Vo & Ma
+    (:meth:`phd_swarm.core.estimators.shirsat.ShirsatEstimator.update` does this).
+    A newborn has a missed-detection term like any component (the paper's filter is Vo &
+    Ma's; no newborn label as in :class:`AdaptiveBirth`).
+
+    Attributes
+    ----------
+    radius : float
+        r_birth, the ring's radius [m], finite and >= 0.
+    weight : float
+        w_gamma, the weight of each component [expected births per step], finite, >= 0.
+    variance : float
+        The diagonal of the position covariance P_gamma [m^2], finite and > 0.
+    angles : tuple of float
+        theta_l [rad], one component each (the paper's four by default); at least one.
+    other_mean : np.ndarray, shape (d - 2,), optional
+        Mean of the non-position coordinates (zeros by default).
+    other_cov : np.ndarray, shape (d - 2, d - 2), optional
+        Their covariance (identity by default), SPD.
+    """
+
+    radius: float
+    weight: float = 0.1
+    variance: float = 0.5
+    angles: tuple[float, ...] = RING_ANGLES
+    other_mean: np.ndarray | None = None
+    other_cov: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", check_nonnegative("radius", self.radius))
+        object.__setattr__(self, "weight", check_nonnegative("weight", self.weight))
+        v = check_nonnegative("variance", self.variance)
+        if v <= 0.0:
+            raise ValueError(f"variance must be > 0, got {self.variance!r}")
+        object.__setattr__(self, "variance", v)
+        angles = np.asarray(self.angles, dtype=float).reshape(-1)
+        if angles.size == 0 or not np.all(np.isfinite(angles)):
+            raise ValueError(f"angles must be one or more finite numbers [rad], got "
+                             f"{self.angles!r}")
+        object.__setattr__(self, "angles", tuple(angles.tolist()))
+        object.__setattr__(self, "_offsets", self.radius * np.stack(
+            [np.cos(angles), np.sin(angles)], axis=1))
+
+    def components(self, sensor: np.ndarray, dim: int) -> GaussianMixture:
+        """gamma_k for a robot at ``sensor`` (eq. 39-40), one component per angle.
+
+        Parameters
+        ----------
+        sensor : np.ndarray, shape (2,)
+            q_k, the robot's position at step k [m].
+        dim : int
+            State dimension d.
+
+        Returns
+        -------
+        GaussianMixture
+            len(angles) components, in the order of ``angles``.
+        """
+        q = np.asarray(sensor, dtype=float).reshape(-1)
+        if q.shape != (2,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"sensor must be a finite position (2,) [m], got {sensor!r}")
+        n = len(self.angles)
+        covs = np.broadcast_to(self.variance * np.eye(2), (n, 2, 2))
+        return place(q + self._offsets, covs, np.full(n, self.weight), dim,
                      self.other_mean, self.other_cov)

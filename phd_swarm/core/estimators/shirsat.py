@@ -1,0 +1,325 @@
+"""Shirsat & Berman's estimator: a GM-PHD per robot and the reward set it accumulates.
+
+Registered as the ``shirsat_gmphd`` estimator (:mod:`phd_swarm.core.registry`). Each robot
+runs Vo & Ma's GM-PHD filter (Sec. V-A, Alg. 1 step 2) with the settings of Sec. VI, and
+keeps its reward M_k, the set of targets it has extracted so far (Alg. 1 line d), which
+robots that meet merge (eq. 6, Alg. 2-3; the ``meet_merge`` exchange calls
+:meth:`ShirsatEstimator.merge_rewards`). One step k of robot a_i at position q_k:
+
+1. prediction (eq. 27-29, Alg. 1 a): every component survives with p_S (eq. 23; 0.1 "as
+   written": the paper's p_S is applied to every component at every step, so a target out
+   of view is forgotten within a few steps, which is what the reward set is for), mean
+   F m = m (F = I_2, static targets), covariance P + Q, Q = ``process_noise_var`` I_2
+   (0.2 I_2); no spawns;
+2. births (eq. 39-40): four components of weight 0.1 and covariance 0.5 I_2 on the ring of
+   radius r_birth = 0.8 r_FoV around q_k (:class:`.gm_births.RingBirth`). q_k is known only
+   with the scan of step k, so they are added to the predicted survivors at the start of
+   the update, which is v_{k|k-1} of eq. 26: births of step k around the robot's position
+   at step k, updated by Z_k;
+3. update (eq. 33-38, Alg. 1 b): p_D = p_D inside the FoV disk of radius r and 0 outside,
+   evaluated at each component's mean (eq. 22; ``p_d_evaluation = integrated`` averages it
+   over the component instead, :class:`.detection.DiskFov`); H = I_2, R = the scenario's
+   measurement variance times I_2; clutter kappa(z) = lambda_C A_s U(z) = lambda_C for z in
+   the FoV disk, 0 outside (``clutter_region = fov``; ``everywhere``: lambda_C at every z);
+4. pruning (weight <= T), merging (squared Mahalanobis distance <= U) and the cap J_max
+   (Vo & Ma Table II, Alg. 1 c);
+5. extraction (Vo & Ma Table III, Alg. 1 d): round(w) copies of the mean of every component
+   with w > 0.5, X^_k;
+6. the reward: ``M_k = M_{k-1} U X^_k`` (Alg. 1 d), a union in which a point within
+   ``duplicate_distance`` of a point already in the set is the same target
+   (:func:`phd_swarm.core.reward_sets.union`; an exact union of real-valued estimates would
+   add every target again at every step).
+
+The default ``duplicate_distance``, 1.5 m, is three measurement standard deviations of the
+paper's sensor (R = 0.25 I_2, sd 0.5 m), the usual 3-sigma gate. With p_S = 0.1 the filter
+has almost no memory, so X^_k is about one measurement filtered with the births: in the
+paper's setting (r = 0.6 m, p_D = 0.8) its error is 0.33 m per axis, plus a pull towards the
+robot of a third of the target's offset from it (the ring's births). Every estimate the
+union does not match becomes a permanent point of M_k (and of every robot that meets this
+one), so the distance must cover the tails of that cloud. Measured extra points per target
+(a robot at a random position within the target's FoV at each step, 100 runs), after 30 /
+100 / 300 sightings: 1.0 m (2 sds): 0.9 / 1.6 / 2.3; 1.2 m (the FoV's diameter): 0.5 /
+0.8 / 1.3; 1.5 m: 0.06 / 0.24 / 0.44; 2.0 m: 0 / 0.01 / 0.05. The price: targets closer
+together than 1.5 m are one target of the reward set (the paper's densities, 0.12 targets
+per m^2 at most, Sec. VI, put a target's nearest neighbour 1.4 m away on average for
+uniformly placed targets, so a scenario should place them apart or lower the distance).
+
+A consequence of the paper's settings worth knowing when reading t_reward: kappa is small
+against the births (p_D w_gamma N(z; ...) ~ 0.02 per birth against lambda_C = 4e-3), so a
+single measurement in the FoV gives a component of weight ~0.9, extracted at once: a clutter
+point (lambda_C pi r^2 = 4.5e-3 per scan, ~4 in 300 steps of 3 robots) becomes a target of
+X^_k and, through the union, a permanent false point of M_k and of every robot met later.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import registry
+from ..params import ParamSpec
+from ..reward_sets import as_points, union
+from ..scan import Scan
+from .base import Estimator
+from .checks import check_measurements
+from .detection import DiskFov
+from .gm_births import RingBirth
+from .gm_phd import (
+    GaussianMixture,
+    GmPhdModel,
+    extract,
+    linear_terms,
+    predict,
+    prune_and_merge,
+    update_with_terms,
+)
+from .shirsat_figures import step_figures
+
+OPTIONS = (
+    ParamSpec("survival_probability", 0.1, "shirsat_gmphd: p_S, applied to every component "
+              "at every step (eq. 23, Sec. VI: 0.1)", low=0.0, high=1.0),
+    ParamSpec("process_noise_var", 0.2, "shirsat_gmphd: process noise variance per axis "
+              "[m^2] (Q = var I_2, Sec. VI: 0.2)", low=0.0),
+    ParamSpec("birth_weight", 0.1, "shirsat_gmphd: weight of each of the four birth "
+              "components (eq. 39: 0.1)", low=0.0),
+    ParamSpec("birth_variance", 0.5, "shirsat_gmphd: diagonal of the birth covariance [m^2] "
+              "(eq. 39: 0.5)", low=0.0),
+    ParamSpec("birth_radius_ratio", 0.8, "shirsat_gmphd: r_birth / r_FoV, the radius of the "
+              "birth ring around the robot (eq. 40: 0.8)", low=0.0),
+    ParamSpec("p_d_evaluation", "mean", "shirsat_gmphd: p_D of a component taken at its mean "
+              "(eq. 22, mean) or averaged over it (integrated)",
+              choices=("mean", "integrated")),
+    ParamSpec("clutter_region", "fov", "shirsat_gmphd: clutter intensity lambda_C inside the "
+              "FoV disk and 0 outside (kappa = lambda_C A_s U(z), fov) or lambda_C at every "
+              "measurement (everywhere)", choices=("fov", "everywhere")),
+    ParamSpec("pruning_weight", 0.001, "shirsat_gmphd: pruning threshold T (Sec. VI: 1e-3; "
+              "Vo & Ma Table II)", low=0.0),
+    ParamSpec("merging_distance", 4.0, "shirsat_gmphd: merging threshold U on the squared "
+              "Mahalanobis distance (Sec. VI: 4; Vo & Ma Table II)", low=0.0),
+    ParamSpec("component_cap", 100, "shirsat_gmphd: J_max, the most components kept (Vo & "
+              "Ma Table II; not stated in the paper)", low=1),
+    ParamSpec("extraction_weight", 0.5, "shirsat_gmphd: weight above which a component gives "
+              "round(w) targets (Alg. 1 d: thresh_state = 0.5; Vo & Ma Table III)",
+              low=0.0),
+    ParamSpec("duplicate_distance", 1.5, "shirsat_gmphd: reward-set union: an estimate "
+              "within this distance of a point of the set is the same target [m] (default: "
+              "3 measurement sds of Sec. VI's sensor; the paper's exact union never matches "
+              "a real-valued estimate)", low=0.0),
+)
+
+
+@dataclass(frozen=True, eq=False)
+class ShirsatSetup:
+    """What every robot's estimator shares (see the module docstring).
+
+    Attributes
+    ----------
+    model : GmPhdModel
+        F = I_2, Q, H = I_2, R, p_S, no fixed births or spawns; T, U, J_max, the extraction
+        threshold. ``clutter_intensity`` is lambda_C [1/m^2].
+    fov : DiskFov
+        p_D of eq. 22 (radius r, p_D inside; at the mean or integrated).
+    birth : RingBirth
+        gamma_k of eq. 39-40.
+    clutter_in_fov_only : bool
+        kappa(z) = lambda_C inside the FoV disk and 0 outside (True), or lambda_C everywhere.
+    duplicate_distance : float
+        The reward-set union's distance [m] (:func:`phd_swarm.core.reward_sets.union`).
+    """
+
+    model: GmPhdModel
+    fov: DiskFov
+    birth: RingBirth
+    clutter_in_fov_only: bool = True
+    duplicate_distance: float = 1.5
+
+    def clutter(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        """kappa(z) [1/m^2] at each measurement (M,) for a scan taken at ``sensor``."""
+        kappa = np.full(z.shape[0], self.model.clutter_intensity)
+        if self.clutter_in_fov_only:
+            d2 = np.sum((z - sensor) ** 2, axis=1)
+            kappa[d2 > self.fov.radius ** 2] = 0.0
+        return kappa
+
+
+def paper_setup(radius: float = 0.6, p_d: float = 0.8, variance: float = 0.25,
+                clutter: float = 3.98e-3, **options: Any) -> ShirsatSetup:
+    """The setup with Sec. VI's values, for a sensor of FoV ``radius`` [m] (no scenario).
+
+    ``options`` override the option defaults (:data:`OPTIONS`, by name).
+    """
+    values = {spec.name: spec.default for spec in OPTIONS}
+    unknown = set(options) - set(values)
+    if unknown:
+        raise ValueError(f"unknown options {sorted(unknown)}; expected some of "
+                         f"{sorted(values)}")
+    values.update(options)
+    return make_setup(radius, p_d, variance, clutter, values)
+
+
+def make_setup(radius: float, p_d: float, variance: float, clutter: float,
+               opt: Mapping[str, Any]) -> ShirsatSetup:
+    """The setup from the sensor's models and the options (by name, all of them)."""
+    q = float(opt["process_noise_var"])
+    model = GmPhdModel(
+        F=np.eye(2), Q=max(q, 1e-12) * np.eye(2), H=np.eye(2),
+        R=float(variance) * np.eye(2), p_s=float(opt["survival_probability"]),
+        birth_weights=np.empty(0), birth_means=np.empty((0, 2)),
+        birth_covs=np.empty((0, 2, 2)), clutter_intensity=float(clutter),
+        prune_threshold=float(opt["pruning_weight"]),
+        merge_threshold=float(opt["merging_distance"]),
+        max_components=int(opt["component_cap"]),
+        extraction_threshold=float(opt["extraction_weight"]))
+    fov = DiskFov(float(radius), float(p_d), integrate=opt["p_d_evaluation"] == "integrated")
+    birth = RingBirth(float(opt["birth_radius_ratio"]) * float(radius),
+                      float(opt["birth_weight"]), max(float(opt["birth_variance"]), 1e-12))
+    return ShirsatSetup(model, fov, birth, opt["clutter_region"] == "fov",
+                        float(opt["duplicate_distance"]))
+
+
+class ShirsatEstimator(Estimator):
+    """One robot's GM-PHD and reward set (see the module docstring).
+
+    Parameters
+    ----------
+    setup : ShirsatSetup
+        The team's shared models.
+    robot_id : int
+        The robot's id, which orders the sets of a merge (:meth:`merge_rewards`).
+    mixture : GaussianMixture, optional
+        Initial intensity (2-D positions); empty by default (Sec. VI: the robots know
+        nothing of the targets at the start).
+
+    Attributes
+    ----------
+    robot_id : int
+    step : int
+        The step of the last update (-1 before the first).
+    """
+
+    def __init__(self, setup: ShirsatSetup, robot_id: int,
+                 mixture: GaussianMixture | None = None) -> None:
+        self.setup = setup
+        self.robot_id = int(robot_id)
+        self._mixture = GaussianMixture.empty(2) if mixture is None else mixture
+        if self._mixture.dim != 2:
+            raise ValueError(f"initial mixture has dimension {self._mixture.dim}, expected 2 "
+                             f"(positions)")
+        self._estimates = np.empty((0, 2))
+        self._reward = np.empty((0, 2))
+        self.step = -1
+        #: The robots whose sets were merged at the last step (a renewal epoch), ascending.
+        self.met = np.empty(0, dtype=np.int64)
+
+    @property
+    def mixture(self) -> GaussianMixture:
+        """The current components (after the last update, or the last prediction)."""
+        return self._mixture
+
+    def predict(self) -> None:
+        """Survivors (eq. 27-29): weights times p_S, covariances plus Q; births come later.
+
+        The births of step k depend on the robot's position at step k, which comes with
+        the scan: :meth:`update` adds them (eq. 26 is completed there).
+        """
+        self._mixture = predict(self._mixture, self.setup.model)
+
+    def update(self, scan: Scan) -> None:
+        """Births around ``scan.sensor``, the GM-PHD update, prune and merge, X^_k, M_k.
+
+        Eq. 26 (the survivors of :meth:`predict` plus gamma_k of eq. 39-40 at q_k =
+        ``scan.sensor``), eq. 33-38 with p_D of eq. 22 and kappa at each measurement, Vo &
+        Ma Tables II and III, then ``M_k = M_{k-1} U X^_k`` (Alg. 1 d).
+        """
+        setup, model = self.setup, self.setup.model
+        sensor = scan.sensor
+        z = check_measurements(scan.z, 2)
+        births = setup.birth.components(sensor, 2)
+        mix = GaussianMixture(np.concatenate([births.weights, self._mixture.weights]),
+                              np.concatenate([births.means, self._mixture.means]),
+                              np.concatenate([births.covs, self._mixture.covs]))
+        p_d = setup.fov(mix.means, mix.covs, sensor)
+        if len(z):
+            posterior = update_with_terms(mix, z, linear_terms(mix, model.H, model.R), p_d,
+                                          setup.clutter(z, sensor)).mixture
+        else:
+            posterior = GaussianMixture((1.0 - p_d) * mix.weights, mix.means, mix.covs)
+        self._mixture = prune_and_merge(posterior, model)
+        self._estimates = extract(self._mixture, model)
+        self._reward = union([self._reward, self._estimates], setup.duplicate_distance)
+        self.step = int(scan.step)
+        self.met = np.empty(0, dtype=np.int64)
+
+    def estimates(self) -> np.ndarray:
+        """X^_k, the targets extracted at the last update (N, 2) [m] (Vo & Ma Table III)."""
+        return self._estimates.copy()
+
+    def expected_count(self) -> float:
+        """The sum of the components' weights (eq. 18)."""
+        return float(self._mixture.weights.sum())
+
+    def reward_set(self) -> np.ndarray:
+        """M_k, the targets extracted so far and merged from the robots met (K, 2) [m], a copy."""
+        return self._reward.copy()
+
+    def merge_rewards(self, others: Mapping[int, np.ndarray]) -> None:
+        """Eq. 6 at a renewal epoch: M_k becomes the union with the sets of the robots met.
+
+        The sets, this robot's own M_k under its id and ``others`` (robot id -> that
+        robot's M_k as it sent it), are taken in increasing robot id
+        (:func:`phd_swarm.core.reward_sets.union`), so every robot of a meeting that
+        receives the others' sets ends with the same set, whatever order the messages came
+        in.
+
+        Raises
+        ------
+        ValueError
+            If ``others`` holds this robot's own id, or a set is malformed (naming the
+            robot); the reward set is then left as it was.
+        """
+        sets = {self.robot_id: self._reward}
+        for rid, points in others.items():
+            rid = int(rid)
+            if rid == self.robot_id:
+                raise ValueError(f"merge_rewards: robot {self.robot_id} received a set under "
+                                 f"its own id")
+            sets[rid] = as_points(points, f"reward set of robot {rid}")
+        self._reward = union([sets[rid] for rid in sorted(sets)],
+                             self.setup.duplicate_distance)
+        self.met = np.array(sorted(set(sets) - {self.robot_id}), dtype=np.int64)
+
+    def export_state(self) -> dict[str, np.ndarray]:
+        """The mixture as plain arrays (:meth:`.gm_phd.GaussianMixture.to_arrays`)."""
+        return self._mixture.to_arrays()
+
+    def import_state(self, arrays: dict[str, np.ndarray], where: str = "mixture") -> None:
+        """Replace the mixture with checked arrays; the estimates and reward set are kept."""
+        mix = GaussianMixture.from_arrays(arrays, where)
+        if mix.dim != 2:
+            raise ValueError(f"{where}: state dimension {mix.dim}, expected 2 (positions)")
+        self._mixture = mix
+
+
+def _setup(scenario: Any, system: Any, **runtime: Any) -> ShirsatSetup:
+    models = scenario.models
+    # The sensor's own clutter model if it has one (disk_false_positive), else the
+    # scenario's uniform clutter density lambda_C.
+    sensor_model = system.parts()["sensor"].setup(scenario, system)
+    kappa = (sensor_model.clutter_intensity() if hasattr(sensor_model, "clutter_intensity")
+             else float(models.clutter.density))
+    return make_setup(float(models.detection.radius), float(models.detection.p_d),
+                      float(models.measurement.variance), kappa,
+                      {spec.name: system.option(spec.name) for spec in OPTIONS})
+
+
+registry.register(
+    "estimator", "shirsat_gmphd", lambda setup, rid: ShirsatEstimator(setup, rid),
+    setup=_setup,
+    description="GM-PHD per robot with births on a ring around it and p_S applied to every "
+                "component, and the reward set of the targets extracted so far, merged "
+                "when robots meet (Shirsat & Berman 2021 Sec. V-VI, eq. 6, Alg. 1-3).",
+    options=OPTIONS, provides=("gaussian_mixture", "reward_set"), requires=("disk_fov",),
+    figures=step_figures)

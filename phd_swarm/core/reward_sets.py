@@ -1,0 +1,134 @@
+"""The union of estimated target sets: Shirsat & Berman's rewards (eq. 6, Alg. 1-3).
+
+A robot's *reward* M_k is the set of target positions it has estimated so far. Each step
+it adds the targets it extracted (Alg. 1 line d, ``M_k = M_{k-1} U X_hat_k``), and when
+robots meet at a node they exchange their rewards and each keeps the union (eq. 6, Alg. 2;
+Alg. 3 adds a pair's estimates to their common set only if they are not in it yet).
+
+The sets here are real-valued: positions [m] extracted from a Gaussian mixture. The same
+target is estimated at a slightly different position at every step and by every robot, so
+the test of Alg. 3, ``x_temp not in X``, never holds for a real-valued estimate: an
+exact-equality union would add every target again at every step (M grows by the targets in
+view, step after step) and the reward's cardinality, the paper's estimated number of targets
+(Fig. 5b, t_reward), would count estimates, not targets. :func:`union` therefore reads
+"``x`` is in the set" as "``x`` lies within ``distance`` of a point of the set", which is the
+exact union when ``distance`` is 0 and the points are distinct.
+
+The rule, precisely: the points of all the sets are taken in order (the first set's rows in
+order, then the second's, ...), and a point is kept unless it lies within ``distance``
+(Euclidean, boundary included) of a point kept before it. So
+
+- the result depends only on the order of the inputs (no tie-breaking, no randomness), and
+  ``union(sets) == union([concatenate(sets)])``;
+- within one set the same rule applies: a set's later row within ``distance`` of one of its
+  own earlier kept rows is dropped (an extraction that gives ``round(w) = 2`` copies of a
+  component's mean is one point of the reward);
+- a kept point is never replaced by a later one, so ``union([M, X])`` contains ``M`` as it
+  was (up to its own duplicates) and a reward never loses a target it once had;
+- the first set survives whole if its points are farther than ``distance`` apart;
+- a later point within ``distance`` of a dropped point but farther than ``distance`` from
+  every kept point is kept (the dropped point does not shadow anything).
+
+The greedy rule is not symmetric in the inputs (two points of two sets within ``distance``:
+the earlier one is kept), so the rewards of two robots that meet are made equal by taking
+the sets in an order both robots agree on: increasing robot id
+(:meth:`phd_swarm.core.estimators.shirsat.ShirsatEstimator.merge_rewards`).
+
+Reference: A. Shirsat and S. Berman, "Decentralized multi-target tracking with multiple
+quadrotors using a PHD filter", AIAA SciTech 2021, eq. 6, Alg. 1-3.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = ["as_points", "union"]
+
+
+def as_points(points: np.ndarray, where: str = "points") -> np.ndarray:
+    """``points`` as a float array (K, 2) [m], checked; ``[]`` is the empty set.
+
+    Raises
+    ------
+    ValueError
+        Naming ``where``, if the shape is not (K, 2) or a coordinate is not finite.
+    """
+    try:
+        a = np.array(points, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: expected an array of 2-D points (K, 2)") from None
+    if a.size == 0:
+        return a.reshape(0, 2)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise ValueError(f"{where}: expected shape (K, 2), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{where}: coordinates must be finite (no NaN or inf)")
+    return a
+
+
+def _first_of_each_cluster(points: np.ndarray, d2: float) -> np.ndarray:
+    """Rows of ``points`` kept by the greedy rule within one set, in order.
+
+    ``close[i, j]`` (j > i) marks pairs within the distance; row i, if still kept, drops
+    the later rows close to it. O(K^2) numpy for the pairs; the Python loop runs only over
+    the rows that have a close later row, none in the usual case.
+    """
+    diff = points[:, None, :] - points[None, :, :]
+    close = np.triu(np.einsum("ijd,ijd->ij", diff, diff) <= d2, k=1)
+    alive = np.ones(len(points), dtype=bool)
+    for i in np.flatnonzero(close.any(axis=1)):
+        if alive[i]:
+            alive &= ~close[i]
+    return points[alive]
+
+
+def union(sets: Sequence[np.ndarray], distance: float) -> np.ndarray:
+    """The union of point sets, a point within ``distance`` of a kept one being the same.
+
+    Eq. 6 / Alg. 1 line d / Alg. 3 for real-valued estimates; the rule and why it is a
+    distance rule are in the module docstring. Each set is compared with the points kept
+    from the earlier sets at once (vectorised), then the greedy rule runs within the set.
+
+    Parameters
+    ----------
+    sets : sequence of np.ndarray, each shape (K_i, 2)
+        Point sets [m], taken in the order given; an empty set may be ``[]`` or shape
+        (0, 2).
+    distance : float
+        Points at most this far apart [m] are one target, finite and >= 0 (0: only equal
+        points are).
+
+    Returns
+    -------
+    np.ndarray, shape (K, 2)
+        The kept points in the order they were met (a new array).
+
+    Raises
+    ------
+    ValueError
+        If ``distance`` is negative or not finite, or a set is malformed (naming it).
+    """
+    try:
+        d = float(distance)
+    except (TypeError, ValueError):
+        raise ValueError(f"distance must be a number >= 0, got {distance!r}") from None
+    if not np.isfinite(d) or d < 0.0:
+        raise ValueError(f"distance must be finite and >= 0, got {distance!r}")
+    d2 = d * d
+    kept: list[np.ndarray] = []
+    n_kept = 0
+    for i, s in enumerate(sets):
+        pts = as_points(s, f"sets[{i}]")
+        if n_kept and len(pts):
+            previous = np.concatenate(kept)
+            diff = pts[:, None, :] - previous[None, :, :]
+            far = np.einsum("ijd,ijd->ij", diff, diff) > d2
+            pts = pts[far.all(axis=1)]
+        if len(pts) > 1:
+            pts = _first_of_each_cluster(pts, d2)
+        if len(pts):
+            kept.append(pts)
+            n_kept += len(pts)
+    return np.concatenate(kept) if kept else np.empty((0, 2))
