@@ -281,6 +281,8 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
         fields["targets"].pop("turn_every")
     if scenario.robot_start_grid is None:
         fields.pop("robot_start_grid")
+    if scenario.targets.layout_seed is None:
+        fields["targets"].pop("layout_seed")
     doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
     try:

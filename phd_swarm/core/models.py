@@ -246,3 +246,16 @@ def sung_tokekar() -> PhdModels:
     """
     return PhdModels(detection=DiskDetection(p_d=0.98, radius=25.0),
                      measurement=GaussianMeasurement(variance=1.0))
+
+
+def shirsat_berman() -> PhdModels:
+    """Shirsat & Berman (2021) Sec. VI: disk FoV of radius 0.6 m, p_D = 0.8 inside (eq. 22).
+
+    Measurements z = x + v with R = 0.25 m^2 I (H = I, eq. 21); clutter Poisson with
+    intensity lambda_C A_s U(z), lambda_C = 3.98e-3 per m^2, uniform over the FoV disk
+    (A_s = 1.13 m^2). The grid models are unused (the robots run a GM-PHD).
+    """
+    return PhdModels(detection=DiskDetection(p_d=0.8, radius=0.6),
+                     measurement=GaussianMeasurement(variance=0.25),
+                     clutter=UniformClutter(density=3.98e-3))
+

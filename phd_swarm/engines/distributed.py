@@ -67,10 +67,14 @@ _TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "Scan": "Meas
 
 
 def message_type(msg: Message) -> str:
-    """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart)."""
+    """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart).
+
+    Dames' messages by class name; another exchange's messages name it (``WIRE_TYPE``).
+    """
     if isinstance(msg, TransferMsg):
         return "ParticleTransfer" if msg.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
-    return _TYPE_NAMES[type(msg).__name__]
+    wire_type = getattr(type(msg), "WIRE_TYPE", None)
+    return wire_type if wire_type is not None else _TYPE_NAMES[type(msg).__name__]
 
 
 @dataclass

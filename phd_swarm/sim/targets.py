@@ -576,13 +576,16 @@ Targets = StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers
 def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     """Initial target population of ``scenario`` (its ``targets`` config), drawn from ``rng``.
 
-    ``static`` -> :meth:`StaticTargets.sample`, ``dames_walk`` -> :meth:`DamesWalkers.sample`
+    ``static`` -> :meth:`StaticTargets.sample` (from a generator of ``targets.layout_seed``
+    instead, if set), ``dames_walk`` -> :meth:`DamesWalkers.sample`
     (with the filter's birth PHD ``scenario.models.birth`` when ``targets.birth``),
     ``clustered_walk`` -> :meth:`ClusteredWalkers.sample`, ``turning_walk`` ->
     :meth:`TurningWalkers.sample`.
     """
     cfg = scenario.targets
     if cfg.kind == "static":
+        if cfg.layout_seed is not None:  # the same targets in every run
+            rng = np.random.default_rng(np.random.SeedSequence(cfg.layout_seed))
         return StaticTargets.sample(rng, scenario.env, cfg.count, cfg.draw_box)
     if cfg.kind == "dames_walk":
         return DamesWalkers.sample(rng, scenario.env, cfg.count, cfg.speed, cfg.heading_sd,

@@ -107,7 +107,7 @@ DESCRIPTIONS: dict[str, str] = {
 #: Meaning and unit of every flattened scenario key (``scenario.<key>``), in display order.
 SCENARIO_MEANINGS: dict[str, str] = {
     "preset": "Preset that the other keys override: dames_static, dames_moving, "
-              "chen_clustered or sung_tokekar.",
+              "chen_clustered, sung_tokekar or shirsat_berman.",
     "name": "Label of the run (default: the preset's name).",
     "env.xmin": "Map E: smallest x [m].",
     "env.ymin": "Map E: smallest y [m].",
@@ -138,6 +138,8 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "robot_start_box": "Robots start uniformly in this box, (xmin, ymin, xmax, ymax) [m], "
                        "inside E.",
     "robot_max_speed": "Speed limit of the holonomic robots [m/s].",
+    "robot_start_grid": "If set, robots start on random nodes of a grid of this spacing [m] "
+                        "inside robot_start_box (Shirsat & Berman); unset: uniform in the box.",
     "targets.kind": "True population: static (Dames IV-A), dames_walk (Dames IV-B), "
                     "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4).",
     "targets.count": "static: targets drawn (those outside E are dropped); dames_walk: "
@@ -158,6 +160,8 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "targets.step_sd": "clustered_walk: per-axis s.d. of the walk's velocity [m/s].",
     "targets.max_speed": "clustered_walk: speed cap [m/s].",
     "targets.turn_every": "turning_walk: seconds between two random headings [s].",
+    "targets.layout_seed": "static: if set, targets drawn from this seed alone, the same in "
+                           "every run (Shirsat & Berman Table 1); unset: from the run's seed.",
     "extraction_threshold": "Target-extraction threshold as a density [targets/m^2]; the "
                             "per-bin threshold is this x resolution^2.",
     "ospa_c": "OSPA cut-off c [m].",

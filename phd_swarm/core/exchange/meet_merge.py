@@ -33,6 +33,7 @@ import numpy as np
 
 from .. import registry
 from ..params import ParamSpec
+from ..scan import CDR_HEADER, CDR_POINT
 from .base import Envelope, Exchange
 from .radio import RangeRadio, SameNodeRadio
 
@@ -54,6 +55,13 @@ class RewardMsg:
     src: int
     step: int
     points: np.ndarray
+
+    #: Its ``msg_defs`` type (for the engines' traffic counts).
+    WIRE_TYPE = "RewardSet"
+
+    def wire_size(self) -> int:
+        """Estimated CDR payload size [bytes]: header, ids, an empty met list, the points."""
+        return CDR_HEADER + 4 + 4 + 4 + 4 + CDR_POINT * len(self.points)
 
 
 class MeetMerge(Exchange):
@@ -186,10 +194,8 @@ class MeetMerge(Exchange):
 
 def _setup(scenario: Any, system: Any, timeout_ticks: int = TIMEOUT_TICKS,
            **runtime: Any) -> tuple[RangeRadio, int]:
-    opt = system.options
-    kind = opt.get("radio", OPTIONS[0].default)
-    radio = (SameNodeRadio() if kind == "same_node"
-             else RangeRadio(float(opt.get("radio_range", OPTIONS[1].default))))
+    radio = (SameNodeRadio() if system.option("radio") == "same_node"
+             else RangeRadio(float(system.option("radio_range"))))
     return radio, int(timeout_ticks)
 
 

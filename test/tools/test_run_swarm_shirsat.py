@@ -1,0 +1,50 @@
+"""Shirsat & Berman's system through ``scripts/run_swarm.sh``: three robots, recorded.
+
+A short run of ``config/shirsat_small.yaml`` (seed 4: meetings at steps 2, 30, 32, 33):
+the log decodes, is complete for the system's own topics (reward sets, components; no cell
+or density), and records the meetings, each robot's set equal to the others' after one.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from phd_swarm.logs.mcap_log import read_messages
+from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.meet_merge_wire import reward_points
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+
+@pytest.fixture(scope="module")
+def shirsat_run(tmp_path_factory, record_swarm):
+    return record_swarm(tmp_path_factory.mktemp("shirsat"), "shirsat_small.yaml", "--seed",
+                        "4", "--duration", "60")
+
+
+def test_the_log_records_the_meetings_and_the_merged_sets(shirsat_run):
+    summary = json.loads((shirsat_run / "summary.json").read_text())
+    assert summary["complete"] and summary["steps"] == 60 and summary["dead_robots"] == []
+    topics = summary["log_completeness"]["topics"]
+    for r in range(3):
+        assert topics[T.robot_topic(r, "reward_set")]["recorded"] == 60
+        assert topics[T.robot_topic(r, "components")]["recorded"] == 60
+    assert not any(t.endswith(("/cell", "/density")) for t in topics)
+    assert set(summary["figures"]) >= {"reward_mean", "all_found", "robots_meeting"}
+    sets: dict[int, dict[int, tuple[list[int], np.ndarray]]] = {}
+    for rec in read_messages(shirsat_run / "run.mcap",
+                             topics=[T.robot_topic(r, "reward_set") for r in range(3)]):
+        sets.setdefault(int(rec.msg.step), {})[int(rec.msg.source_id)] = (
+            list(rec.msg.met_ids), reward_points(rec.msg))
+    met = {k: {r: ids for r, (ids, _) in by.items() if ids} for k, by in sets.items()}
+    assert sorted(k for k, m in met.items() if m) == [2, 30, 32, 33]
+    for k, m in met.items():
+        for r, ids in m.items():
+            for other in ids:  # robots that met hold the same set after the meeting
+                assert r in sets[k][other][0]
+                np.testing.assert_array_equal(sets[k][r][1], sets[k][other][1])
+    assert summary["messages_per_robot_per_step"] == pytest.approx(
+        sum(len(ids) for m in met.values() for ids in m.values()) / (3 * 60))
