@@ -64,6 +64,7 @@ ROBOT_COLOURS: dict[str, tuple[float, float, float, float]] = {
     "component": (0.58, 0.40, 0.74, 1.0),         # purple
     "track_confirmed": (0.17, 0.63, 0.17, 1.0),   # green
     "track_tentative": (0.74, 0.74, 0.13, 0.7),   # translucent olive
+    "reward": (0.09, 0.75, 0.81, 0.9),            # cyan: a reward set's targets
 }
 
 #: Most components drawn, the heaviest first.
@@ -190,7 +191,8 @@ class RobotMarkers:
         return m
 
     def build(self, stamp: Time, position: np.ndarray, mixture: MixtureArrays | None,
-              tracks: TrackArrays | None, path: np.ndarray) -> MarkerArray:
+              tracks: TrackArrays | None, path: np.ndarray,
+              rewards: np.ndarray | None = None) -> MarkerArray:
         """The robot's markers for one step (see the class docstring).
 
         Parameters
@@ -206,12 +208,14 @@ class RobotMarkers:
             Its targets with their tracks (N of them); None: no targets.
         path : np.ndarray, shape (P, 2)
             The planned waypoints [m], in visiting order (P may be 0).
+        rewards : np.ndarray, shape (K, 2), optional
+            Its reward set (Shirsat & Berman's M_k) [m]; None: no ``rewards`` marker.
 
         Returns
         -------
         MarkerArray
             ``robot``, ``fov``, ``components``, ``targets``, ``track_ids`` (n ADD, then
-            the DELETE ones), ``path``, in that order.
+            the DELETE ones), ``path``, in that order, then ``rewards`` if given.
 
         Raises
         ------
@@ -231,9 +235,15 @@ class RobotMarkers:
         if here and self.fov_radius > 0.0:
             fov.points = _points(q + self._ring)
 
-        return MarkerArray(markers=[robot, fov, self._components(stamp, mixture),
-                                    *self._tracks(stamp, tracks),
-                                    self._path(stamp, q, path)])
+        markers = [robot, fov, self._components(stamp, mixture), *self._tracks(stamp, tracks),
+                   self._path(stamp, q, path)]
+        if rewards is not None:
+            reward = self._new(stamp, "rewards", 0, Marker.CUBE_LIST, TRACK_DIAMETER,
+                               "reward")
+            pts = _xy(rewards)
+            reward.points = _points(pts[_finite(pts)])
+            markers.append(reward)
+        return MarkerArray(markers=markers)
 
     def _components(self, stamp: Time, mixture: MixtureArrays | None) -> Marker:
         marker = self._new(stamp, "components", 0, Marker.LINE_LIST, ELLIPSE_LINE_WIDTH,

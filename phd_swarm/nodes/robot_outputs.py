@@ -133,7 +133,8 @@ class RobotOutputs:
         if self.markers is not None:
             self.markers_pub.publish(self.markers.build(
                 convert.stamp(k, self.dt), self.agent.position, mixture, tracks,
-                self.agent.controller.planned_path()))
+                self.agent.controller.planned_path(),
+                est.reward_set() if "reward_set" in self.pubs else None))
 
     def status_fields(self) -> dict[str, Any]:
         """What the status of the step reports of the estimate: bins, mass, dead peers."""

@@ -280,3 +280,15 @@ def test_a_large_marker_array_serialises():
     check_common(out)
     assert len(one(out, "components").points) == j * 2 * ELLIPSE_SEGMENTS
     assert len(out.markers) == 5 + n // 2
+
+
+def test_a_reward_set_is_drawn_as_cubes_when_given():
+    markers = RobotMarkers(3, FRAME, 0.6)
+    without = markers.build(STAMP, np.zeros(2), None, None, np.empty((0, 2)))
+    assert "robot_3/rewards" not in by_ns(without)
+    array = markers.build(STAMP, np.zeros(2), None, None, np.empty((0, 2)),
+                          rewards=np.array([[1.0, 2.0], [np.nan, 0.0], [3.0, 4.0]]))
+    check_common(array)
+    reward = one(array, "rewards")
+    assert reward.type == Marker.CUBE_LIST
+    np.testing.assert_array_equal(xy(reward), [[1.0, 2.0], [3.0, 4.0]])
