@@ -130,3 +130,18 @@ def test_bench_sung_quick_times_a_trial_the_gp_and_the_ros_run(tmp_path, childre
     assert all(gp[f"{n} tracks"] > 0 for n in (1, 10, 50))
     assert ros["steps"] == 600 and ros["complete"] and ros["real_time_factor"] > 0
     assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", "robot_0"}
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_shirsat_quick_times_the_robot_step_and_the_ros_run(tmp_path, children):
+    proc = children.start([str(ROOT / "scripts" / "bench.sh"), "shirsat", "--quick",
+                           "--out", str(tmp_path)])
+    _, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    trial, ros = json.loads(next(tmp_path.glob("shirsat-*.json")).read_text())["results"]
+    assert trial["robot_steps"] == 200 * 20 and trial["ms_per_robot_step"] > 0
+    assert ros["steps"] == 300 and ros["complete"] and ros["real_time_factor"] > 0
+    # One message per robot met, none otherwise: a robot at a meeting meets 1 or 2 others.
+    meeting = ros["robots_meeting_per_step"] / 3
+    assert meeting - 1e-12 <= ros["messages_per_robot_per_step"] <= 2 * meeting + 1e-12
