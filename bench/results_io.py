@@ -6,6 +6,8 @@ import datetime as dt
 import json
 import os
 import platform
+import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -25,3 +27,27 @@ def write_results(out: Path, suite: str, meta: dict[str, object], results: list)
     path.write_text(json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
     print(f"wrote {path}")
     return path
+
+
+def run_swarm_figures(config: Path, *options: str) -> dict[str, object]:
+    """``scripts/run_swarm.sh CONFIG OPTIONS`` (recorded, on loopback); its summary's figures.
+
+    Steps, completeness, stepping and total wall time, real-time factor, CPU seconds per
+    process, messages per robot per step, and the system's own figure means.
+    """
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "42"),
+               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [str(root / "scripts" / "run_swarm.sh"), str(config), *options, "--out", tmp,
+               "--name", "run", "--quiet"]
+        subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
+        s = json.loads((Path(tmp) / "run" / "summary.json").read_text())
+    return {"case": f"ROS nodes, lockstep, recorded ({config.relative_to(root)})",
+            "steps": s["steps"], "complete": s["complete"],
+            "stepping_wall_s": round(s["stepping_wall_s"], 2),
+            "total_wall_s": round(s["wall_duration_s"], 2),
+            "real_time_factor": round(s["real_time_factor"], 2),
+            "messages_per_robot_per_step": s["messages_per_robot_per_step"],
+            "figures": s.get("figures", {}), "cpu_s": s["cpu_s"]}
+

@@ -17,15 +17,11 @@ Writes ``bench/results/shirsat-<date>.json``.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import subprocess
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-from results_io import machine_meta, write_results
+from results_io import machine_meta, run_swarm_figures, write_results
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.scoring import score_estimates
@@ -57,25 +53,6 @@ def run_trial(steps: int | None) -> tuple[float, float, int]:
     return engine_s, score_s, sc.steps * sc.robots
 
 
-def ros_run() -> dict[str, object]:
-    """``run_swarm.sh config/shirsat_small.yaml`` (recorded); its figures."""
-    env = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "42"),
-               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    with tempfile.TemporaryDirectory() as tmp:
-        cmd = [str(ROOT / "scripts" / "run_swarm.sh"),
-               str(ROOT / "config" / "shirsat_small.yaml"), "--out", tmp, "--name", "run",
-               "--quiet"]
-        subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
-        s = json.loads((Path(tmp) / "run" / "summary.json").read_text())
-    return {"case": "ROS nodes, lockstep, recorded (config/shirsat_small.yaml)",
-            "steps": s["steps"], "complete": s["complete"],
-            "stepping_wall_s": round(s["stepping_wall_s"], 2),
-            "real_time_factor": round(s["real_time_factor"], 2),
-            "messages_per_robot_per_step": s["messages_per_robot_per_step"],
-            "robots_meeting_per_step": s["figures"]["robots_meeting"],
-            "cpu_s": s["cpu_s"]}
-
-
 def main() -> None:
     """Time the trial and the ROS run, print the figures and write them."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -96,7 +73,8 @@ def main() -> None:
     print(f"Table 1 scenario 1 trial: {robot_steps} robot-steps, engine {engine_s:.2f} s + "
           f"scoring {score_s:.2f} s CPU = {ms:.3f} ms per robot-step; Table 1 in full "
           f"~{trial['table1_full_min_on_2']} min on 2 workers")
-    ros = ros_run()
+    ros = run_swarm_figures(ROOT / "config" / "shirsat_small.yaml")
+    ros["robots_meeting_per_step"] = ros["figures"]["robots_meeting"]
     print(f"ROS nodes (shirsat_small, lockstep, recorded): {ros['steps']} steps, "
           f"{ros['real_time_factor']}x real time, {ros['messages_per_robot_per_step']:.4f} "
           f"messages per robot per step ({ros['robots_meeting_per_step']:.3f} robots "

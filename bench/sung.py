@@ -19,15 +19,11 @@ Writes ``bench/results/sung-<date>.json``.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import subprocess
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-from results_io import machine_meta, write_results
+from results_io import machine_meta, run_swarm_figures, write_results
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.estimators.gp_motion import GpHyperparameters, predict_tracks
@@ -79,24 +75,6 @@ def gp_cost(tracks: int, window: int, repeats: int = 200) -> float:
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def ros_run(steps: int | None) -> dict[str, object]:
-    """``run_swarm.sh config/sung_static.yaml --robots 1`` (recorded); its figures."""
-    env = dict(os.environ, ROS_DOMAIN_ID=os.environ.get("ROS_DOMAIN_ID", "42"),
-               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    with tempfile.TemporaryDirectory() as tmp:
-        cmd = [str(ROOT / "scripts" / "run_swarm.sh"), str(ROOT / "config" / "sung_static.yaml"),
-               "--robots", "1", "--out", tmp, "--name", "run", "--quiet",
-               *(["--duration", str(float(steps))] if steps else [])]
-        subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
-        s = json.loads((Path(tmp) / "run" / "summary.json").read_text())
-    return {"case": "ROS nodes, lockstep, recorded (config/sung_static.yaml)",
-            "steps": s["steps"], "complete": s["complete"],
-            "stepping_wall_s": round(s["stepping_wall_s"], 2),
-            "total_wall_s": round(s["wall_duration_s"], 2),
-            "real_time_factor": round(s["real_time_factor"], 2),
-            "cpu_s": s["cpu_s"]}
-
-
 def main() -> None:
     """Time the two trials and the GP, print the figures and write them."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -124,7 +102,8 @@ def main() -> None:
     results.append({"case": "GP prediction, window 100, ms per track per step", **gp})
     print("GP prediction, window 100 [ms per track per step]: "
           + ", ".join(f"{k}: {v}" for k, v in gp.items()))
-    ros = ros_run(steps)
+    ros = run_swarm_figures(ROOT / "config" / "sung_static.yaml", "--robots", "1",
+                            *(["--duration", str(float(steps))] if steps else []))
     results.append(ros)
     print(f"ROS nodes (lockstep, recorded): {ros['steps']} steps in {ros['stepping_wall_s']} s "
           f"wall, {ros['real_time_factor']}x real time; CPU s per process {ros['cpu_s']}")

@@ -26,6 +26,8 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from .points import as_points
+
 
 @dataclass(frozen=True)
 class OspaComponents:
@@ -58,18 +60,7 @@ class OspaComponents:
 
 
 def _as_points(name: str, points: np.ndarray) -> np.ndarray:
-    try:
-        arr = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of 2-D points, shape (k, 2)") from None
-    if arr.size == 0:
-        # [] and np.empty((0, 2)) both mean "no points"; only the row count matters.
-        return arr.reshape(0, 2)
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{name} must have shape (k, 2), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must contain only finite coordinates")
-    return arr
+    return as_points(points, name)
 
 
 def _check_params(c: float, p: float) -> None:

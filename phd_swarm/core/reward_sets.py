@@ -44,28 +44,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .points import as_points
+
 __all__ = ["as_points", "union"]
-
-
-def as_points(points: np.ndarray, where: str = "points") -> np.ndarray:
-    """``points`` as a float array (K, 2) [m], checked; ``[]`` is the empty set.
-
-    Raises
-    ------
-    ValueError
-        Naming ``where``, if the shape is not (K, 2) or a coordinate is not finite.
-    """
-    try:
-        a = np.array(points, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{where}: expected an array of 2-D points (K, 2)") from None
-    if a.size == 0:
-        return a.reshape(0, 2)
-    if a.ndim != 2 or a.shape[1] != 2:
-        raise ValueError(f"{where}: expected shape (K, 2), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{where}: coordinates must be finite (no NaN or inf)")
-    return a
 
 
 def _first_of_each_cluster(points: np.ndarray, d2: float) -> np.ndarray:
