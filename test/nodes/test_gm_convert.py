@@ -80,3 +80,19 @@ def test_a_bad_track_set_is_refused_naming_the_field(spoil, field):
     spoil(msg)
     with pytest.raises(InvalidMessage, match=field):
         tracks_from_ros(msg, 10)
+
+
+def test_a_reward_set_travels_exactly_and_a_bad_one_is_refused():
+    from geometry_msgs.msg import Point
+
+    from phd_swarm.nodes.meet_merge_wire import reward_points, reward_set
+
+    pts = np.array([[1.25, 2.5], [3.0, -0.125]])
+    msg = reward_set(4, 7, pts, 1.0, "map", met=[1, 2])
+    assert list(msg.met_ids) == [1, 2]
+    np.testing.assert_array_equal(reward_points(msg), pts)
+    with pytest.raises(InvalidMessage, match="more than 1"):
+        reward_points(msg, max_rewards=1)
+    msg.positions[1] = Point(x=float("nan"), y=0.0)
+    with pytest.raises(InvalidMessage, match="positions"):
+        reward_points(msg)

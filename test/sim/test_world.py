@@ -213,3 +213,16 @@ def test_a_robot_started_on_the_grid_walks_on_it():
         w.apply_goals({r: walks[r].decide(Knowledge(r, k, q[r], np.empty((0, 2))),
                                           rngs[r]).goal for r in range(3)})
         w.advance()
+
+
+def test_a_layout_seed_gives_the_same_targets_whatever_the_run_seed():
+    from phd_swarm.sim.scenario import shirsat_berman
+
+    base = shirsat_berman(side=15.0, robots=20, targets=10)
+    fixed = [World(base.with_overrides(seed=s)).truth()[1] for s in (0, 1)]
+    np.testing.assert_array_equal(fixed[0], fixed[1])
+    free = base.with_overrides(targets=dataclasses.replace(base.targets, layout_seed=None))
+    drawn = [World(free.with_overrides(seed=s)).truth()[1] for s in (0, 1)]
+    assert not np.array_equal(drawn[0], drawn[1])
+    with pytest.raises(ValueError, match="targets.layout_seed"):
+        dataclasses.replace(base.targets, layout_seed=-1)
