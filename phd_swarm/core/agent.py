@@ -150,14 +150,17 @@ class Agent:
         self.power_weight = 0.0
 
     # --------------------------------------------------------------------- step
-    def start_step(self, step: int, position: np.ndarray, z: np.ndarray) -> list:
+    def start_step(self, step: int, position: np.ndarray, z: np.ndarray, *,
+                   estimated: bool = False) -> list:
         """Start ``step`` at ``position`` with measurement set ``z``; messages to send.
 
-        The estimator predicts and takes the scan first (unless the exchange runs it).
+        The estimator predicts and takes the scan first (unless the exchange runs it, or
+        ``estimated``: the caller has already stepped it with this scan, e.g. the
+        distributed engine with the estimator part's ``team_step``).
         """
         self.position = np.asarray(position, dtype=float)
         self.z = np.asarray(z, dtype=float).reshape(-1, 2)
-        if self._runs_estimator:
+        if self._runs_estimator and not estimated:
             self.estimator.predict()
             self.estimator.update(Scan(self.robot_id, step, self.position, self.z))
         return self.exchange.start_step(step, self.position, self.power_weight, self.z)

@@ -162,6 +162,15 @@ class GridGraph:
         iy = np.clip(np.floor((p[..., 1] - self.ymin) / self.spacing + 0.5), 0, self.ny - 1)
         return (iy * self.nx + ix).astype(np.int64)
 
+    def node_of_point(self, x: float, y: float) -> int:
+        """:meth:`node_of` for one point (x, y) [m], in scalar arithmetic (a robot's step).
+
+        The same operations on the same doubles as :meth:`node_of`, so the same node.
+        """
+        ix = min(max(math.floor((x - self.xmin) / self.spacing + 0.5), 0), self.nx - 1)
+        iy = min(max(math.floor((y - self.ymin) / self.spacing + 0.5), 0), self.ny - 1)
+        return iy * self.nx + ix
+
     def neighbours_of(self, node: int) -> np.ndarray:
         """N(i): the neighbours of node ``node`` (itself excluded), shape (d_i,)."""
         return self.table[node, 1:1 + self.degrees[node]].copy()

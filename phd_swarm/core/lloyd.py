@@ -24,7 +24,7 @@ from .polygons import polygon_area, polygon_centroid
 
 def _as_point(name: str, value: np.ndarray) -> np.ndarray:
     p = np.asarray(value, dtype=float).reshape(-1)
-    if p.shape != (2,) or not np.all(np.isfinite(p)):
+    if p.shape != (2,) or not np.isfinite(p).all():
         raise ValueError(f"{name} must be two finite numbers, got {value!r}")
     return p
 

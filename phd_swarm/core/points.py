@@ -26,6 +26,6 @@ def as_points(points: np.ndarray, where: str = "points") -> np.ndarray:
         return a.reshape(0, 2)
     if a.ndim != 2 or a.shape[1] != 2:
         raise ValueError(f"{where}: expected shape (K, 2), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"{where}: coordinates must be finite (no NaN or inf)")
     return a

@@ -46,7 +46,7 @@ import numpy as np
 
 from .points import as_points
 
-__all__ = ["as_points", "union"]
+__all__ = ["as_points", "extend", "union"]
 
 
 def _first_of_each_cluster(points: np.ndarray, d2: float) -> np.ndarray:
@@ -91,19 +91,52 @@ def union(sets: Sequence[np.ndarray], distance: float) -> np.ndarray:
     ValueError
         If ``distance`` is negative or not finite, or a set is malformed (naming it).
     """
+    kept = _grow([], sets, _squared(distance))
+    return np.concatenate(kept) if kept else np.empty((0, 2))
+
+
+def extend(reduced: np.ndarray, sets: Sequence[np.ndarray], distance: float) -> np.ndarray:
+    """``union([reduced, *sets], distance)`` for a ``reduced`` that is already a union.
+
+    A robot's reward grows by the targets of each step (Alg. 1 line d); its points are
+    farther than ``distance`` apart already, so the greedy rule keeps all of them and only
+    the new sets need comparing. The result equals :func:`union`'s, and is ``reduced``
+    itself (not a copy) when nothing is added, which is most steps.
+
+    Parameters
+    ----------
+    reduced : np.ndarray, shape (K, 2)
+        A :func:`union` result [m] (trusted: not checked again).
+    sets : sequence of np.ndarray, each shape (K_i, 2)
+        The sets to add, in order.
+    distance : float
+        As for :func:`union`.
+    """
+    d2 = _squared(distance)
+    if not any(len(s) for s in sets):
+        return reduced
+    kept = _grow([reduced] if len(reduced) else [], sets, d2)
+    return np.concatenate(kept) if kept else np.empty((0, 2))
+
+
+def _squared(distance: float) -> float:
+    """``distance`` squared, after checking it is a finite number >= 0."""
     try:
         d = float(distance)
     except (TypeError, ValueError):
         raise ValueError(f"distance must be a number >= 0, got {distance!r}") from None
     if not np.isfinite(d) or d < 0.0:
         raise ValueError(f"distance must be finite and >= 0, got {distance!r}")
-    d2 = d * d
-    kept: list[np.ndarray] = []
-    n_kept = 0
+    return d * d
+
+
+def _grow(kept: list[np.ndarray], sets: Sequence[np.ndarray], d2: float) -> list[np.ndarray]:
+    """Add each set's points to ``kept`` (points pairwise farther than sqrt(d2)) by the rule."""
+    n_kept = sum(len(k) for k in kept)
     for i, s in enumerate(sets):
         pts = as_points(s, f"sets[{i}]")
         if n_kept and len(pts):
-            previous = np.concatenate(kept)
+            previous = kept[0] if len(kept) == 1 else np.concatenate(kept)
             diff = pts[:, None, :] - previous[None, :, :]
             far = np.einsum("ijd,ijd->ij", diff, diff) > d2
             pts = pts[far.all(axis=1)]
@@ -112,4 +145,4 @@ def union(sets: Sequence[np.ndarray], distance: float) -> np.ndarray:
         if len(pts):
             kept.append(pts)
             n_kept += len(pts)
-    return np.concatenate(kept) if kept else np.empty((0, 2))
+    return kept

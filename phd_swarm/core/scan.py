@@ -40,10 +40,10 @@ class Scan:
     def __post_init__(self) -> None:
         sensor = np.asarray(self.sensor, dtype=float).reshape(-1)[:2]
         z = np.asarray(self.z, dtype=float).reshape(-1, 2)
-        if sensor.shape != (2,) or not np.all(np.isfinite(sensor)):
+        if sensor.shape != (2,) or not np.isfinite(sensor).all():
             raise ValueError(f"scan of robot {self.robot_id}: sensor position must be two "
                              f"finite numbers, got {self.sensor!r}")
-        if not np.all(np.isfinite(z)):
+        if not np.isfinite(z).all():
             raise ValueError(f"scan of robot {self.robot_id}: measurements must be finite")
         object.__setattr__(self, "sensor", sensor)
         object.__setattr__(self, "z", z)

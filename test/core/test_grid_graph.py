@@ -119,6 +119,13 @@ def test_node_of_is_the_nearest_node():
     assert g.node_of([4.0, 5.5]) == g.size - 1
 
 
+def test_node_of_point_is_node_of_for_one_point():
+    g = GridGraph(-1.0, 2.0, 4.0, 5.5, 0.5, 4)
+    pts = np.random.default_rng(4).uniform([-3.0, 0.0], [6.0, 8.0], size=(300, 2))
+    pts = np.vstack([pts, g.positions, g.positions + 0.25])          # half-way points too
+    assert [g.node_of_point(x, y) for x, y in pts.tolist()] == g.node_of(pts).tolist()
+
+
 @pytest.mark.parametrize("neighbours", [4, 8])
 def test_step_draws_each_allowed_move_with_probability_one_over_d_plus_one(neighbours):
     g = GridGraph(0.0, 0.0, 3.0, 3.0, 1.0, neighbours)

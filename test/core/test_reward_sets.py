@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.reward_sets import as_points, union
+from phd_swarm.core.reward_sets import as_points, extend, union
 
 
 def _reference(sets, distance):
@@ -108,3 +108,21 @@ def test_malformed_sets_are_refused_naming_them(bad, match):
 def test_a_bad_distance_is_refused(distance):
     with pytest.raises(ValueError, match="distance"):
         union([[[0.0, 0.0]]], distance)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_extend_of_a_union_equals_the_union_with_the_new_sets(seed):
+    rng = np.random.default_rng(seed)
+    reduced = union([rng.uniform(0.0, 6.0, (12, 2))], 1.0)
+    new = [rng.uniform(0.0, 6.0, (int(rng.integers(0, 5)), 2)) for _ in range(3)]
+    np.testing.assert_array_equal(extend(reduced, new, 1.0), union([reduced, *new], 1.0))
+
+
+def test_extend_with_nothing_new_returns_the_set_itself():
+    reduced = np.array([[0.0, 0.0], [3.0, 0.0]])
+    assert extend(reduced, [np.empty((0, 2))], 1.5) is reduced
+    assert extend(np.empty((0, 2)), [[]], 1.5).shape == (0, 2)
+    np.testing.assert_array_equal(extend(np.empty((0, 2)), [[[1.0, 1.0], [1.2, 1.0]]], 1.5),
+                                  [[1.0, 1.0]])
+    with pytest.raises(ValueError, match="distance"):
+        extend(reduced, [], -1.0)

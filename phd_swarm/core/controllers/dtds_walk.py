@@ -19,6 +19,7 @@ step 1.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -99,9 +100,10 @@ class DtdsWalk(Controller):
         A draw of eq. 4 from the node the robot stands on (within :data:`ON_NODE`) with
         ``rng``; off the grid, its nearest node, without a draw.
         """
-        q = np.asarray(position, dtype=float).reshape(2)
-        node = int(self.graph.node_of(q))
-        if np.hypot(*(self.graph.positions[node] - q)) > ON_NODE:
+        x, y = np.asarray(position, dtype=float).reshape(2).tolist()
+        node = self.graph.node_of_point(x, y)
+        nx, ny = self.graph.positions[node].tolist()
+        if math.hypot(nx - x, ny - y) > ON_NODE:
             return node
         return int(self.graph.step(rng, np.array([node]))[0])
 

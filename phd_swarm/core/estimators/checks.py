@@ -82,8 +82,8 @@ def check_measurements(z: np.ndarray, measurement_dim: int | None = None) -> np.
     if z.ndim != 2 or (measurement_dim is not None and z.shape[1] != measurement_dim):
         m = "m" if measurement_dim is None else measurement_dim
         raise ValueError(f"measurements z must have shape (M, {m}), got {z.shape}")
-    bad = ~np.all(np.isfinite(z), axis=1)
-    if bad.any():
+    if not np.isfinite(z).all():
+        bad = ~np.isfinite(z).all(axis=1)
         i = int(np.flatnonzero(bad)[0])
         raise ValueError(f"measurements z must be finite: row {i} is {z[i].tolist()}")
     return z

@@ -55,18 +55,18 @@ def _position_moments(means, covs) -> tuple[np.ndarray, ...]:
         raise ValueError(f"covs must have shape ({j}, {d}, {d}), got {p.shape}")
     m = m[:, :2]
     p = p[:, :2, :2]
-    bad = ~np.all(np.isfinite(m), axis=1)
-    if np.any(bad):
+    if not np.isfinite(m).all():
+        bad = ~np.isfinite(m).all(axis=1)
         raise ValueError(f"means must be finite, row {int(np.argmax(bad))} is {m[bad][0]}")
-    bad = ~np.all(np.isfinite(p), axis=(1, 2))
-    if np.any(bad):
+    if not np.isfinite(p).all():
+        bad = ~np.isfinite(p).all(axis=(1, 2))
         raise ValueError(f"covs must be finite, row {int(np.argmax(bad))} has "
                          f"position block {p[bad][0].tolist()}")
     a, b, b2, c = p[:, 0, 0], p[:, 0, 1], p[:, 1, 0], p[:, 1, 1]
     scale = np.maximum(np.abs(a) + np.abs(c), 1e-300)
     bad = (np.abs(b - b2) > 1e-9 * scale) | (a < 0.0) | (c < 0.0) \
         | (b * b > a * c + 1e-9 * scale * scale)
-    if np.any(bad):
+    if bad.any():
         i = int(np.argmax(bad))
         raise ValueError(f"covs[{i}] position block must be symmetric positive "
                          f"semi-definite, got {p[i].tolist()}")
@@ -75,7 +75,7 @@ def _position_moments(means, covs) -> tuple[np.ndarray, ...]:
 
 def _point(name: str, v) -> np.ndarray:
     v = np.asarray(v, dtype=float)
-    if v.shape != (2,) or not np.all(np.isfinite(v)):
+    if v.shape != (2,) or not np.isfinite(v).all():
         raise ValueError(f"{name} must be a finite position (2,) [m], got {v.tolist()}")
     return v
 
@@ -396,7 +396,7 @@ def _points(points) -> np.ndarray:
     p = np.asarray(points, dtype=float)
     if p.ndim != 2 or p.shape[1] != 2:
         raise ValueError(f"points must have shape (N, 2), got {p.shape}")
-    if not np.all(np.isfinite(p)):
+    if not np.isfinite(p).all():
         raise ValueError("points must be finite (no NaN or inf)")
     return p
 
@@ -424,7 +424,7 @@ class _FieldOfView:
         if self.integrate:
             return self.p_inside * self._mass(means, covs, sensor)
         m, _, _, _ = _position_moments(means, covs)
-        return self.at_points(m, sensor)
+        return np.where(self._inside(m, sensor), self.p_inside, 0.0)
 
     def at_points(self, points, sensor) -> np.ndarray:
         """p_D at positions ``points`` (N, 2) [m] for a scan from ``sensor`` (2,) [m]: (N,)."""

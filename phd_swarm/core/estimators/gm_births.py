@@ -219,6 +219,8 @@ class RingBirth:
         object.__setattr__(self, "angles", tuple(angles.tolist()))
         object.__setattr__(self, "_offsets", self.radius * np.stack(
             [np.cos(angles), np.sin(angles)], axis=1))
+        object.__setattr__(self, "_position_covs", np.broadcast_to(
+            self.variance * np.eye(2), (angles.size, 2, 2)).copy())
 
     def components(self, sensor: np.ndarray, dim: int) -> GaussianMixture:
         """gamma_k for a robot at ``sensor`` (eq. 39-40), one component per angle.
@@ -236,9 +238,31 @@ class RingBirth:
             len(angles) components, in the order of ``angles``.
         """
         q = np.asarray(sensor, dtype=float).reshape(-1)
-        if q.shape != (2,) or not np.all(np.isfinite(q)):
+        if q.shape != (2,) or not np.isfinite(q).all():
             raise ValueError(f"sensor must be a finite position (2,) [m], got {sensor!r}")
         n = len(self.angles)
-        covs = np.broadcast_to(self.variance * np.eye(2), (n, 2, 2))
-        return place(q + self._offsets, covs, np.full(n, self.weight), dim,
+        if dim == 2 and self.other_mean is None and self.other_cov is None:
+            # Positions only: place() would copy the same numbers in (a robot's every step).
+            return GaussianMixture(np.full(n, self.weight), q + self._offsets,
+                                   self._position_covs.copy())
+        return place(q + self._offsets, self._position_covs, np.full(n, self.weight), dim,
                      self.other_mean, self.other_cov)
+
+    def ring_rows(self, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """gamma_k of many robots at once, positions only: what :meth:`components` gives each.
+
+        Parameters
+        ----------
+        sensors : np.ndarray, shape (R, 2)
+            The robots' positions [m] (finite; not checked again).
+
+        Returns
+        -------
+        weights : np.ndarray, shape (B,)
+        means : np.ndarray, shape (R, B, 2) [m]
+            Row r equals ``components(sensors[r], 2).means``, bit for bit.
+        covs : np.ndarray, shape (B, 2, 2) [m^2]
+        """
+        sensors = np.asarray(sensors, dtype=float).reshape(-1, 2)
+        return (np.full(len(self.angles), self.weight), sensors[:, None, :] + self._offsets,
+                self._position_covs.copy())

@@ -532,8 +532,7 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
         diff = m[:, None, :] - m[None, :, :]
         close = np.einsum("ijd,ide,ije->ij", diff, p_inv, diff) <= model.merge_threshold
         if np.count_nonzero(close) == n:
-            labels[order] = np.arange(n)
-            order, n_groups = order[:0], n
+            return _singletons(w, m, p, order[:model.max_components])
     for j in order:
         if taken[j]:
             continue
@@ -558,6 +557,21 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
     cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
     order = np.argsort(-w_sum, kind="stable")[:model.max_components]
     return GaussianMixture(w_sum[order], mean[order], cov[order])
+
+
+def _singletons(w: np.ndarray, m: np.ndarray, p: np.ndarray,
+                order: np.ndarray) -> GaussianMixture:
+    """:func:`prune_and_merge`'s result when every component is its own group.
+
+    The same arithmetic as the general path on groups of one (``(w m) / w``, the
+    moment-matched covariance, the symmetrisation), bit for bit, without the grouping:
+    ``order`` is the components by decreasing weight (stable), capped at J_max.
+    """
+    wg, mg, pg = w[order], m[order], p[order]
+    mean = (wg[:, None] * mg) / wg[:, None]
+    dm = mean - mg
+    cov = wg[:, None, None] * (pg + dm[:, :, None] * dm[:, None, :]) / wg[:, None, None]
+    return GaussianMixture(wg, mean, 0.5 * (cov + np.swapaxes(cov, -1, -2)))
 
 
 def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:

@@ -53,7 +53,7 @@ X^_k and, through the union, a permanent false point of M_k and of every robot m
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,21 +61,14 @@ import numpy as np
 
 from .. import registry
 from ..params import ParamSpec
-from ..reward_sets import as_points, union
+from ..reward_sets import as_points, extend, union
 from ..scan import Scan
 from .base import Estimator
 from .checks import check_measurements
 from .detection import DiskFov
 from .gm_births import RingBirth
-from .gm_phd import (
-    GaussianMixture,
-    GmPhdModel,
-    extract,
-    linear_terms,
-    predict,
-    prune_and_merge,
-    update_with_terms,
-)
+from .gm_phd import GaussianMixture, GmPhdModel, extract, linear_terms, update_with_terms
+from .gm_team import PaddedMixtures, predict_rows, prune_and_merge_rows
 from .shirsat_figures import step_figures
 
 OPTIONS = (
@@ -223,35 +216,20 @@ class ShirsatEstimator(Estimator):
         """Survivors (eq. 27-29): weights times p_S, covariances plus Q; births come later.
 
         The births of step k depend on the robot's position at step k, which comes with
-        the scan: :meth:`update` adds them (eq. 26 is completed there).
+        the scan: :meth:`update` adds them (eq. 26 is completed there). Computed as a team
+        of one (:func:`predict_team`), so that a robot alone and in a team agree bit for bit.
         """
-        self._mixture = predict(self._mixture, self.setup.model)
+        predict_team([self])
 
     def update(self, scan: Scan) -> None:
         """Births around ``scan.sensor``, the GM-PHD update, prune and merge, X^_k, M_k.
 
         Eq. 26 (the survivors of :meth:`predict` plus gamma_k of eq. 39-40 at q_k =
         ``scan.sensor``), eq. 33-38 with p_D of eq. 22 and kappa at each measurement, Vo &
-        Ma Tables II and III, then ``M_k = M_{k-1} U X^_k`` (Alg. 1 d).
+        Ma Tables II and III, then ``M_k = M_{k-1} U X^_k`` (Alg. 1 d). Computed as a team
+        of one (:func:`update_team`).
         """
-        setup, model = self.setup, self.setup.model
-        sensor = scan.sensor
-        z = check_measurements(scan.z, 2)
-        births = setup.birth.components(sensor, 2)
-        mix = GaussianMixture(np.concatenate([births.weights, self._mixture.weights]),
-                              np.concatenate([births.means, self._mixture.means]),
-                              np.concatenate([births.covs, self._mixture.covs]))
-        p_d = setup.fov(mix.means, mix.covs, sensor)
-        if len(z):
-            posterior = update_with_terms(mix, z, linear_terms(mix, model.H, model.R), p_d,
-                                          setup.clutter(z, sensor)).mixture
-        else:
-            posterior = GaussianMixture((1.0 - p_d) * mix.weights, mix.means, mix.covs)
-        self._mixture = prune_and_merge(posterior, model)
-        self._estimates = extract(self._mixture, model)
-        self._reward = union([self._reward, self._estimates], setup.duplicate_distance)
-        self.step = int(scan.step)
-        self.met = np.empty(0, dtype=np.int64)
+        update_team([self], [scan])
 
     def estimates(self) -> np.ndarray:
         """X^_k, the targets extracted at the last update (N, 2) [m] (Vo & Ma Table III)."""
@@ -303,6 +281,94 @@ class ShirsatEstimator(Estimator):
         self._mixture = mix
 
 
+def predict_team(estimators: Sequence[ShirsatEstimator]) -> None:
+    """:meth:`ShirsatEstimator.predict` of every robot, at once (:func:`.gm_team.predict_rows`)."""
+    model = _shared_setup(estimators).model
+    pred = predict_rows(PaddedMixtures.from_mixtures([e.mixture for e in estimators]),
+                        model.F, model.Q, model.p_s)
+    for r, e in enumerate(estimators):
+        e._mixture = pred.row(r)
+
+
+def update_team(estimators: Sequence[ShirsatEstimator], scans: Sequence[Scan]) -> None:
+    """:meth:`ShirsatEstimator.update` of every robot with its scan, at once.
+
+    The steps of the module docstring for all robots together: births, p_D and the missed
+    detections for every row of one padded array; the measurement update (eq. 33-38) for
+    each robot that measured something (few do: the FoV is small); pruning and merging for
+    every row (:func:`.gm_team.prune_and_merge_rows`); then each robot's X^_k and M_k.
+    Each robot's numbers are those it computes alone (row independence, see
+    :mod:`.gm_team`).
+    """
+    setup = _shared_setup(estimators)
+    model, fov = setup.model, setup.fov
+    if len(scans) != len(estimators):
+        raise ValueError(f"update_team: {len(scans)} scans for {len(estimators)} robots")
+    zs = [check_measurements(scan.z, 2) for scan in scans]
+    sensors = np.array([scan.sensor for scan in scans], dtype=float).reshape(-1, 2)
+    prior = PaddedMixtures.from_mixtures([e.mixture for e in estimators])
+    bw, bm, bc = setup.birth.ring_rows(sensors)
+    b = bw.size
+    # v_{k|k-1} of eq. 26 in each row: the births, then the predicted survivors.
+    mix = PaddedMixtures.empty(len(estimators), b + prior.weights.shape[1])
+    mix.weights[:, :b] = bw
+    mix.means[:, :b] = bm
+    mix.covs[:, :b] = bc
+    mix.weights[:, b:] = prior.weights
+    mix.means[:, b:] = prior.means
+    mix.covs[:, b:] = prior.covs
+    mix.count[:] = b + prior.count
+    if fov.integrate:
+        p_d = np.zeros_like(mix.weights)
+        for r in range(len(estimators)):
+            n = mix.count[r]
+            p_d[r, :n] = fov(mix.means[r, :n], mix.covs[r, :n], sensors[r])
+    else:
+        # DiskFov at the means (eq. 22), elementwise as DiskFov._inside.
+        inside = np.hypot(mix.means[..., 0] - sensors[:, None, 0],
+                          mix.means[..., 1] - sensors[:, None, 1]) <= fov.radius
+        p_d = np.where(inside, fov.p_inside, 0.0)
+    measured = [r for r, z in enumerate(zs) if len(z)]
+    posteriors = {}
+    for r in measured:
+        row, n = mix.row(r), mix.count[r]
+        posteriors[r] = update_with_terms(row, zs[r], linear_terms(row, model.H, model.R),
+                                          p_d[r, :n], setup.clutter(zs[r], sensors[r])).mixture
+    mix.weights = (1.0 - p_d) * mix.weights                      # missed detections
+    width = max([mix.weights.shape[1], *(len(p) for p in posteriors.values())])
+    if width > mix.weights.shape[1]:
+        wider = PaddedMixtures.empty(len(estimators), width)
+        n = mix.weights.shape[1]
+        wider.weights[:, :n], wider.means[:, :n], wider.covs[:, :n] = (
+            mix.weights, mix.means, mix.covs)
+        wider.count[:] = mix.count
+        mix = wider
+    for r, post in posteriors.items():
+        mix.set_row(r, post)
+    merged = prune_and_merge_rows(mix, model.prune_threshold, model.merge_threshold,
+                                  model.max_components)
+    for e, scan, mixture in zip(estimators, scans, merged, strict=True):
+        e._mixture = mixture
+        e._estimates = extract(mixture, model)
+        e._reward = extend(e._reward, [e._estimates], setup.duplicate_distance)
+        e.step = int(scan.step)
+        e.met = np.empty(0, dtype=np.int64)
+
+
+def step_team(estimators: Sequence[ShirsatEstimator], scans: Sequence[Scan]) -> None:
+    """Predict and update every robot at once (the distributed engine's team step)."""
+    if estimators:
+        predict_team(estimators)
+        update_team(estimators, scans)
+
+
+def _shared_setup(estimators: Sequence[ShirsatEstimator]) -> ShirsatSetup:
+    setups = {id(e.setup): e.setup for e in estimators}
+    if len(setups) != 1:
+        raise ValueError(f"a team step needs robots that share one setup, got {len(setups)}")
+    return next(iter(setups.values()))
+
+
 def _setup(scenario: Any, system: Any, **runtime: Any) -> ShirsatSetup:
     models = scenario.models
     # The sensor's own clutter model if it has one (disk_false_positive), else the
@@ -322,4 +388,4 @@ registry.register(
                 "component, and the reward set of the targets extracted so far, merged "
                 "when robots meet (Shirsat & Berman 2021 Sec. V-VI, eq. 6, Alg. 1-3).",
     options=OPTIONS, provides=("gaussian_mixture", "reward_set"), requires=("disk_fov",),
-    figures=step_figures)
+    figures=step_figures, team_step=step_team)

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from phd_swarm.config import load_run_config
 from phd_swarm.core import registry
 from phd_swarm.core.estimators.gm_births import RING_ANGLES, RingBirth
 from phd_swarm.core.estimators.gm_phd import GaussianMixture
-from phd_swarm.core.estimators.shirsat import ShirsatEstimator, paper_setup
+from phd_swarm.core.estimators.shirsat import (
+    ShirsatEstimator,
+    paper_setup,
+    step_team,
+    update_team,
+)
 from phd_swarm.core.estimators.shirsat_figures import FIGURES, step_figures
 from phd_swarm.core.models import (
     DiskDetection,
@@ -27,6 +35,7 @@ MODELS = PhdModels(detection=DiskDetection(p_d=0.8, radius=0.6),
                    measurement=GaussianMeasurement(variance=0.25),
                    clutter=UniformClutter(density=3.98e-3))
 KAPPA = 3.98e-3
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _gauss(z, m, var):
@@ -46,6 +55,16 @@ def test_ring_birth_places_four_components_on_the_ring_around_the_robot():
     np.testing.assert_array_equal(mix.covs, np.broadcast_to(0.5 * np.eye(2), (4, 2, 2)))
     assert RING_ANGLES == pytest.approx((np.pi / 4, 3 * np.pi / 4, 5 * np.pi / 4,
                                          7 * np.pi / 4))
+
+
+def test_ring_rows_give_each_robot_its_components_bit_for_bit():
+    birth = RingBirth(radius=0.48)
+    sensors = np.random.default_rng(2).uniform(-5.0, 5.0, (6, 2))
+    w, means, covs = birth.ring_rows(sensors)
+    for q, m in zip(sensors, means, strict=True):
+        mix = birth.components(q, 2)
+        assert np.array_equal(m, mix.means) and np.array_equal(w, mix.weights)
+        assert np.array_equal(covs, mix.covs)
 
 
 def test_ring_birth_options_and_a_longer_state():
@@ -313,6 +332,67 @@ def test_a_team_runs_through_the_engine_with_the_figures_hook():
     assert tuple(f) == FIGURES
     ests = [engine.agents[rid].estimator for rid in engine.live_ids()]
     assert f == step_figures(ests, truth, engine.scenario.ospa_c, engine.scenario.ospa_p)
+
+
+@pytest.mark.parametrize("p_d_evaluation", ["mean", "integrated"])
+def test_a_team_step_equals_each_robot_stepping_alone_bit_for_bit(p_d_evaluation):
+    """step_team (the engine's) against predict + update robot by robot (a ROS node's)."""
+    setup = paper_setup(p_d_evaluation=p_d_evaluation)
+    rng = np.random.default_rng(11)
+    targets = rng.uniform(0.0, 3.0, (6, 2))
+    team = [ShirsatEstimator(setup, rid) for rid in range(5)]
+    alone = [ShirsatEstimator(setup, rid) for rid in range(5)]
+    positions = rng.uniform(0.0, 3.0, (5, 2))
+    measured = 0
+    for k in range(40):
+        positions = np.clip(positions + rng.normal(0.0, 0.3, positions.shape), 0.0, 3.0)
+        scans = [Scan(rid, k, positions[rid], simulate_scan(rng, MODELS, positions[rid],
+                                                            targets)) for rid in range(5)]
+        measured += sum(len(s.z) > 0 for s in scans)
+        step_team(team, scans)
+        for est, scan in zip(alone, scans, strict=True):
+            est.predict()
+            est.update(scan)
+        for a, b in zip(team, alone, strict=True):
+            for x, y in ((a.mixture.weights, b.mixture.weights),
+                         (a.mixture.means, b.mixture.means), (a.mixture.covs, b.mixture.covs),
+                         (a.estimates(), b.estimates()), (a.reward_set(), b.reward_set())):
+                assert np.array_equal(x, y)
+            assert a.step == b.step == k
+    assert measured > 20 and sum(len(e.reward_set()) for e in team) > 0
+
+
+def test_the_engine_gives_the_same_run_with_and_without_the_team_step(monkeypatch):
+    """The small scenario (3 robots walking and meeting), 120 steps."""
+    scenario = load_run_config(ROOT / "config" / "shirsat_small.yaml").scenario
+    scenario = scenario.with_overrides(duration=120 * scenario.dt, seed=4)
+
+    def run():
+        engine = DistributedEngine(scenario)
+        met = 0
+        for _ in range(scenario.steps):
+            engine.step()
+            met += sum(engine.agents[r].estimator.met.size > 0 for r in engine.agents)
+        return met, [np.concatenate([e.mixture.weights, e.mixture.means.ravel(),
+                                     e.mixture.covs.ravel(), e.reward_set().ravel()])
+                     for e in (engine.agents[r].estimator for r in sorted(engine.agents))]
+
+    met, with_team = run()
+    part = registry.lookup("estimator", "shirsat_gmphd")
+    assert part.extras["team_step"] is step_team
+    monkeypatch.delitem(part.extras, "team_step")
+    met_alone, without = run()
+    assert met == met_alone > 0
+    assert all(np.array_equal(a, b) for a, b in zip(with_team, without, strict=True))
+
+
+def test_a_team_step_needs_one_setup_and_a_scan_per_robot():
+    a, b = ShirsatEstimator(paper_setup(), 0), ShirsatEstimator(paper_setup(), 1)
+    with pytest.raises(ValueError, match="share one setup"):
+        step_team([a, b], [Scan(0, 0, np.zeros(2), np.empty((0, 2)))] * 2)
+    with pytest.raises(ValueError, match="1 scans for 2 robots"):
+        update_team([a, ShirsatEstimator(a.setup, 1)], [Scan(0, 0, np.zeros(2),
+                                                             np.empty((0, 2)))])
 
 
 # ---------------------------------------------------------------------------- figures
