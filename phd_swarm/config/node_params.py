@@ -71,7 +71,8 @@ MONITOR = (
     ParamSpec("progress_every", 10, "Log a progress line every this many steps (0: never).",
               low=0, high=1_000_000),
     ParamSpec("publish_density", True, "Publish the team PHD on /monitor/density."),
-    ParamSpec("publish_markers", True, "Publish /monitor/markers (cells, goals, estimates)."),
+    ParamSpec("publish_markers", True, "Publish /monitor/markers (cells, goals, estimates; "
+              "grid nodes and meetings of a walk on a grid)."),
     ParamSpec("exit_when_done", False, "Shut down after the last step of the scenario."),
     ParamSpec("end_timeout", 30.0, "After the world stops, wall seconds to wait for the last "
               "grids before finishing with what arrived [s].", low=0.0, high=3600.0),

@@ -29,7 +29,7 @@ heptagonal cells about 2 ms and 1 ms.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -49,6 +49,8 @@ COLOURS: dict[str, tuple[float, float, float, float]] = {
     "goal": (1.0, 0.5, 0.05, 1.0),            # orange
     "goal_line": (1.0, 0.5, 0.05, 0.6),       # translucent orange
     "estimate": (0.17, 0.63, 0.17, 0.6),      # translucent green
+    "grid_node": (0.75, 0.75, 0.75, 0.5),     # translucent light grey
+    "meeting": (0.98, 0.84, 0.1, 0.8),        # yellow
 }
 
 #: Sizes [m]: sphere/cube diameters and edge lengths, line widths, text height.
@@ -62,6 +64,8 @@ CELL_LINE_WIDTH = 0.15
 GOAL_DIAMETER = 0.6
 GOAL_LINE_WIDTH = 0.05
 ESTIMATE_DIAMETER = 1.5      # larger than a target's cube, so a hit shows the cube inside
+GRID_NODE_SIZE = 0.08
+MEETING_DIAMETER = 1.2       # around the robots' spheres at a renewal epoch
 
 
 def _rgba(name: str) -> ColorRGBA:
@@ -199,7 +203,8 @@ def world_markers(stamp: Time, frame_id: str, positions: np.ndarray, alive: np.n
 
 def team_markers(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
                  positions: Mapping[int, np.ndarray], goals: Mapping[int, np.ndarray],
-                 estimates: np.ndarray) -> MarkerArray:
+                 estimates: np.ndarray, *, grid_nodes: np.ndarray | None = None,
+                 meeting_ids: Sequence[int] | None = None) -> MarkerArray:
     """The team's view of a step: cells, goals and the extracted target estimates.
 
     Namespaces and markers (ids fixed, so each call replaces the previous one):
@@ -214,6 +219,11 @@ def team_markers(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
       translucent orange.
     - ``estimates``, id 0: SPHERE_LIST, diameter :data:`ESTIMATE_DIAMETER`, translucent
       green (a target's cube shows inside the sphere of a correct estimate).
+    - ``grid``, id 0, only with ``grid_nodes``: POINTS at the nodes of a walk's grid graph
+      (Shirsat & Berman Sec. II), :data:`GRID_NODE_SIZE`, translucent light grey.
+    - ``meetings``, id 0, only with ``meeting_ids``: SPHERE_LIST at the positions of the
+      robots that merged their sets at the step (a renewal epoch), diameter
+      :data:`MEETING_DIAMETER`, yellow; empty when nobody met.
 
     Parameters
     ----------
@@ -229,11 +239,16 @@ def team_markers(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
         Robot id -> goal, shape (2,) [m].
     estimates : np.ndarray, shape (M, 2)
         Extracted target positions [m].
+    grid_nodes : np.ndarray, shape (S, 2), optional
+        Node positions of the robots' grid graph [m].
+    meeting_ids : sequence of int, optional
+        Robots at a meeting this step (those without a position are left out).
 
     Returns
     -------
     MarkerArray
-        ``cells``, ``goals`` (spheres), ``goals`` (lines), ``estimates``, in that order.
+        ``cells``, ``goals`` (spheres), ``goals`` (lines), ``estimates``, then ``grid`` and
+        ``meetings`` when asked for, in that order.
     """
     polygons = [v for v in (_xy(cells[k]) for k in sorted(cells))
                 if len(v) >= 3 and _finite(v).all()]
@@ -261,4 +276,16 @@ def team_markers(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
                     "estimate")
     found.points = _points(est[_finite(est)])
 
-    return MarkerArray(markers=[edges, spheres, lines, found])
+    extra = []
+    if grid_nodes is not None:
+        grid = _marker(stamp, frame_id, "grid", 0, Marker.POINTS, GRID_NODE_SIZE, "grid_node")
+        nodes = _xy(grid_nodes)
+        grid.points = _points(nodes[_finite(nodes)])
+        extra.append(grid)
+    if meeting_ids is not None:
+        meet = _marker(stamp, frame_id, "meetings", 0, Marker.SPHERE_LIST, MEETING_DIAMETER,
+                       "meeting")
+        at = _xy([positions[k] for k in sorted(set(meeting_ids)) if k in positions])
+        meet.points = _points(at[_finite(at)])
+        extra.append(meet)
+    return MarkerArray(markers=[edges, spheres, lines, found, *extra])

@@ -115,6 +115,12 @@ class MonitorNode(Node):
         self.outputs: dict[int, dict[int, dict[str, Any]]] = defaultdict(
             lambda: defaultdict(dict))
         self.statuses: dict[int, dict[int, RobotStatus]] = defaultdict(dict)
+        #: The walk's grid graph nodes (S, 2) [m] when the controller walks on a grid (drawn
+        #: every GRID_MARKERS_EVERY steps), and whether robots report meetings.
+        controller = self.scenario.system.parts()["controller"]
+        self.grid_nodes = (controller.setup(self.scenario, self.scenario.system).positions
+                           if "grid_walk" in controller.provides else None)
+        self.meetings = "reward_set" in self.inputs
         self.cells: dict[int, np.ndarray] = {}
         self.positions: dict[int, np.ndarray] = {}
         self.goals: dict[int, np.ndarray] = {}
@@ -280,8 +286,12 @@ class MonitorNode(Node):
                 convert.TEAM_ID, k, self.grid, np.arange(self.grid.size), image.ravel(),
                 self.dt, self.frame_id))
         if self.params["publish_markers"]:
-            self.markers_pub.publish(team_markers(stamp, self.frame_id, self.cells,
-                                                  self.positions, self.goals, estimates))
+            grid = self.grid_nodes if k % GRID_MARKERS_EVERY == 0 else None
+            met = ([r for r, got in have.items() if len(got["reward_set"].met_ids)]
+                   if self.meetings else None)
+            self.markers_pub.publish(team_markers(
+                stamp, self.frame_id, self.cells, self.positions, self.goals, estimates,
+                grid_nodes=grid, meeting_ids=met))
         every = self.params["progress_every"]
         if every and (k % every == 0 or k == self.scenario.steps - 1):
             self._log_progress(row)
@@ -380,6 +390,11 @@ class MonitorNode(Node):
             for pub in (self.metrics_pub, self.estimates_pub):
                 pub.wait_for_all_acked(Duration(seconds=5.0))
             self.finished = True
+
+
+#: A walk's grid (thousands of points) is drawn at step 0 and every this many steps; its
+#: marker id is fixed, so a viewer keeps it in between.
+GRID_MARKERS_EVERY = 100
 
 
 def estimator_view(got: dict[str, Any]) -> gm_convert.EstimatorView:

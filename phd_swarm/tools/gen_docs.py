@@ -51,7 +51,9 @@ DESCRIPTIONS: dict[str, str] = {
                             "robots alive and reporting, messages per robot.",
     topics.MONITOR_ESTIMATES: "Targets extracted from the team PHD (observation only).",
     topics.MONITOR_DENSITY: "Team PHD assembled from the robots' density windows.",
-    topics.MONITOR_MARKERS: "Cells, goals and extracted estimates, for RViz2 / Foxglove "
+    topics.MONITOR_MARKERS: "Cells, goals and extracted estimates; the nodes of a walk's "
+                            "grid graph (every 100 steps) and the robots meeting "
+                            "(Shirsat & Berman); for RViz2 / Foxglove "
                             "(`markers.team_markers`).",
     ROBOT_PATTERN.format("measurements"): "Measurement set Z_r^k and sensor position q^k "
                                           "from the simulated sensor; starts the robot's "

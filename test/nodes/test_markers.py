@@ -156,6 +156,25 @@ def test_team_empty_inputs():
         [("cells", 0, 0), ("goals", 0, 0), ("goals", 1, 0), ("estimates", 0, 0)]
 
 
+def test_team_grid_and_meetings():
+    nodes = np.array([[0.0, 0.0], [0.5, 0.0], [np.nan, 1.0], [0.5, 0.5]])
+    positions = {0: np.array([0.5, 0.5]), 2: np.array([0.5, 0.5]), 3: np.array([0.0, 0.0])}
+    out = team_markers(STAMP, FRAME, {}, positions, {}, np.zeros((0, 2)), grid_nodes=nodes,
+                       meeting_ids=[2, 0, 7])
+    check_common(out)
+    ns = by_ns(out)
+    (grid,) = ns["grid"]
+    assert (grid.type, grid.scale.x) == (Marker.POINTS, markers.GRID_NODE_SIZE)
+    np.testing.assert_array_equal(xy(grid)[:, :2], nodes[[0, 1, 3]])
+    (meet,) = ns["meetings"]
+    assert meet.type == Marker.SPHERE_LIST and rgba(meet.color) == expected("meeting")
+    # Robots 0 and 2 met on one node; robot 7 has no position and is left out.
+    np.testing.assert_array_equal(xy(meet)[:, :2], [[0.5, 0.5], [0.5, 0.5]])
+    quiet = team_markers(STAMP, FRAME, {}, positions, {}, np.zeros((0, 2)), meeting_ids=[])
+    assert [(m.ns, len(m.points)) for m in quiet.markers][-1] == ("meetings", 0)
+    assert "grid" not in by_ns(quiet)
+
+
 def test_fixed_ids_across_calls():
     rng = np.random.default_rng(3)
 

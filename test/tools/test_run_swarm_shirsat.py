@@ -48,3 +48,20 @@ def test_the_log_records_the_meetings_and_the_merged_sets(shirsat_run):
                 np.testing.assert_array_equal(sets[k][r][1], sets[k][other][1])
     assert summary["messages_per_robot_per_step"] == pytest.approx(
         sum(len(ids) for m in met.values() for ids in m.values()) / (3 * 60))
+
+
+def test_the_monitor_draws_the_grid_and_the_meetings(shirsat_run):
+    """/monitor/markers: the walk's grid at step 0, a sphere per robot at each meeting."""
+    grid_points, meeting_points = {}, {}
+    for rec in read_messages(shirsat_run / "run.mcap", topics=[T.MONITOR_MARKERS]):
+        step = round((rec.msg.markers[0].header.stamp.sec
+                      + rec.msg.markers[0].header.stamp.nanosec * 1e-9) / 1.0)
+        for m in rec.msg.markers:
+            if m.ns == "grid":
+                grid_points[step] = len(m.points)
+            elif m.ns == "meetings":
+                meeting_points[step] = len(m.points)
+    assert grid_points == {0: 11 * 11}                       # 5 x 5 m at 0.5 m: 11 x 11 nodes
+    assert len(meeting_points) == 60
+    assert {k for k, n in meeting_points.items() if n} == {2, 30, 32, 33}
+    assert all(n >= 2 for n in meeting_points.values() if n)
