@@ -76,7 +76,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
 
 
 _PRESET_OF_KIND = {"static": "dames_static", "dames_walk": "dames_moving",
-                   "clustered_walk": "chen_clustered", "turning_walk": "sung_tokekar"}
+                   "clustered_walk": "chen_clustered", "turning_walk": "sung_tokekar",
+                   "ncv": "papaioannou"}
 
 
 def flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -283,6 +283,9 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
         fields.pop("robot_start_grid")
     if scenario.targets.layout_seed is None:
         fields["targets"].pop("layout_seed")
+    if scenario.targets.kind != "ncv":
+        for name in ("spawn", "lifetime_mean", "birth_spread", "process_noise", "noise_form"):
+            fields["targets"].pop(name)
     doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
     try:

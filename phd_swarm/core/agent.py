@@ -123,6 +123,11 @@ class Agent:
         bind = getattr(self.exchange, "bind_estimator", None)
         if bind is not None:
             bind(self.estimator)
+        # One that carries the controller's state (Papaioannou et al.'s mode and joint
+        # plan) is handed the controller.
+        bind = getattr(self.exchange, "bind_controller", None)
+        if bind is not None:
+            bind(self.controller)
         self._view = team.parts["exchange"].extras.get("view", lambda exchange: None)
         #: Whether this agent runs the estimator, or the exchange does (Dames' grid PHD).
         self._runs_estimator = not team.parts["estimator"].extras.get("runs_in_exchange")

@@ -35,6 +35,7 @@ from phd_swarm.core.params import (
     expect_str,
 )
 from phd_swarm.core.system import SystemConfig
+from phd_swarm.sim.ncv_targets import NOISE_FORMS, SPAWNS
 from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
 #: Side of the extraction window [m]: Dames' 3 x 3 bins of 1 m (Sec. IV).
@@ -42,7 +43,7 @@ EXTRACTION_WINDOW_M = 3.0
 
 Box = tuple[float, float, float, float]
 
-TARGET_KINDS = ("static", "dames_walk", "clustered_walk", "turning_walk")
+TARGET_KINDS = ("static", "dames_walk", "clustered_walk", "turning_walk", "ncv")
 
 #: The Dames and Chen map: a 100 x 100 m open square.
 MAP_100 = Environment(0.0, 0.0, 100.0, 100.0)
@@ -105,6 +106,17 @@ class TargetConfig:
         ``clustered_walk``: speed cap [m/s] (Chen: 3).
     turn_every : float
         ``turning_walk``: seconds between two random headings [s] (Sung: 400 steps of 1 s).
+    spawn : str
+        ``ncv``: targets appear at the centre of E or uniformly in ``draw_box``
+        (:data:`~phd_swarm.sim.ncv_targets.SPAWNS`; Papaioannou Fig. 3: centre).
+    lifetime_mean : float
+        ``ncv``: mean lifetime [s], geometric (Papaioannou Fig. 3-4: 60, Fig. 5: 30).
+    birth_spread : float
+        ``ncv``: birth times uniform over [0, birth_spread) [s]; 0: all present at the start.
+    process_noise : float
+        ``ncv``: q of the NCV model's Q [m^2/s^3] (Papaioannou Sec. VI-A: 1).
+    noise_form : str
+        ``ncv``: ``standard`` or ``printed`` Q (:func:`~phd_swarm.sim.ncv_targets.ncv_matrices`).
     layout_seed : int or None
         ``static``: if set, the targets are drawn from a generator of this seed alone, so
         every run has the same targets whatever its own seed (Shirsat & Berman Sec. VI:
@@ -126,6 +138,11 @@ class TargetConfig:
     max_speed: float = 3.0
     turn_every: float = 400.0
     layout_seed: int | None = None
+    spawn: str = "uniform"
+    lifetime_mean: float = 60.0
+    birth_spread: float = 0.0
+    process_noise: float = 1.0
+    noise_form: str = "standard"
 
     def __post_init__(self) -> None:
         expect_str(self.kind, "targets.kind", choices=TARGET_KINDS)
@@ -144,6 +161,11 @@ class TargetConfig:
         expect_number(self.step_sd, "targets.step_sd", low=0.0)
         expect_number(self.max_speed, "targets.max_speed", low=0.0)
         expect_number(self.turn_every, "targets.turn_every", low=0.0, strict=True)
+        expect_str(self.spawn, "targets.spawn", choices=SPAWNS)
+        expect_number(self.lifetime_mean, "targets.lifetime_mean", low=0.0, strict=True)
+        expect_number(self.birth_spread, "targets.birth_spread", low=0.0)
+        expect_number(self.process_noise, "targets.process_noise", low=0.0)
+        expect_str(self.noise_form, "targets.noise_form", choices=NOISE_FORMS)
         clusters = _boxes(self.clusters, "targets.clusters")
         object.__setattr__(self, "clusters", clusters)
         per = _counts(self.per_cluster, "targets.per_cluster")
@@ -461,10 +483,36 @@ def shirsat_berman(side: float = 5.0, robots: int = 3, targets: int = 3,
                             options=(("grid_spacing", SHIRSAT_SPACING),)))
 
 
+#: Papaioannou et al.'s system: square range-bearing sensor, the SAT density (particle PHD
+#: and search map), the opportunistic exchange within C_R, search-and-track control.
+PAPAIOANNOU_SYSTEM = {"sensor": "square_range_bearing", "estimator": "papaioannou_sat",
+                      "exchange": "sat_share", "controller": "sat_search_track"}
+
+
+def papaioannou(agents: int = 4, targets: int = 10, spawn: str = "centre") -> Scenario:
+    """Papaioannou et al. Sec. VI: agents searching and tracking NCV targets, 100 x 100 m.
+
+    100 steps of 1 s (Sec. VI-B); agents start uniformly over the area and move by eq. 4
+    (at most 2 x 2 m per step, so the speed limit is 4 m/s); 10 targets born at the centre
+    with random headings and a mean lifetime of 60 s (Fig. 3; ``spawn: uniform`` for Fig. 4).
+    OSPA of order 2 with c = 50 m (Fig. 3). The disk detection model of ``models`` only
+    sizes the world's field-of-view markers (radius 5 m, the square's half side); the
+    sensor part has its own models.
+    """
+    return Scenario(
+        name="papaioannou", env=MAP_100, resolution=1.0,
+        models=PhdModels(detection=core_models.DiskDetection(p_d=0.99, radius=5.0)),
+        dt=1.0, duration=100.0, robots=agents, robot_start_box=(0.0, 0.0, 100.0, 100.0),
+        robot_max_speed=4.0,
+        targets=TargetConfig(kind="ncv", count=targets, spawn=spawn, speed=1.0,
+                             lifetime_mean=60.0),
+        ospa_c=50.0, ospa_p=2.0, system=SystemConfig(**PAPAIOANNOU_SYSTEM))
+
+
 PRESETS: dict[str, Callable[[], Scenario]] = {
     "dames_static": dames_static, "dames_moving": dames_moving,
     "chen_clustered": chen_clustered, "sung_tokekar": sung_tokekar,
-    "shirsat_berman": shirsat_berman}
+    "shirsat_berman": shirsat_berman, "papaioannou": papaioannou}
 
 
 def _optional_number(value: Any, path: str) -> float | None:
@@ -479,7 +527,9 @@ _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "heading_sd": expect_number, "heading_rate": expect_number, "birth": expect_bool,
     "birth_heading": expect_str, "clusters": _boxes, "per_cluster": _counts,
     "step_sd": expect_number, "max_speed": expect_number, "turn_every": expect_number,
-    "layout_seed": lambda v, path: None if v is None else expect_int(v, path, low=0)}
+    "layout_seed": lambda v, path: None if v is None else expect_int(v, path, low=0),
+    "spawn": expect_str, "lifetime_mean": expect_number, "birth_spread": expect_number,
+    "process_noise": expect_number, "noise_form": expect_str}
 
 _SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "name": expect_str, "resolution": expect_number, "dt": expect_number,

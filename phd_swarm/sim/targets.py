@@ -28,6 +28,7 @@ import numpy as np
 
 from phd_swarm.core.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
+from phd_swarm.sim.ncv_targets import NcvTargets
 
 if TYPE_CHECKING:
     from phd_swarm.sim.scenario import Scenario
@@ -570,7 +571,7 @@ class TurningWalkers:
         self._positions = _frozen(np.clip(nxt, self._lo, self._hi))
 
 
-Targets = StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers
+Targets = StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers | NcvTargets
 
 
 def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
@@ -580,7 +581,7 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     instead, if set), ``dames_walk`` -> :meth:`DamesWalkers.sample`
     (with the filter's birth PHD ``scenario.models.birth`` when ``targets.birth``),
     ``clustered_walk`` -> :meth:`ClusteredWalkers.sample`, ``turning_walk`` ->
-    :meth:`TurningWalkers.sample`.
+    :meth:`TurningWalkers.sample`, ``ncv`` -> :meth:`~phd_swarm.sim.ncv_targets.NcvTargets.sample`.
     """
     cfg = scenario.targets
     if cfg.kind == "static":
@@ -598,4 +599,10 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     if cfg.kind == "turning_walk":
         return TurningWalkers.sample(rng, scenario.env, cfg.count, cfg.draw_box, cfg.speed,
                                      cfg.turn_every)
+    if cfg.kind == "ncv":
+        return NcvTargets.sample(rng, scenario.env, cfg.count, scenario.dt, spawn=cfg.spawn,
+                                 draw_box=cfg.draw_box, speed=cfg.speed,
+                                 lifetime_mean=cfg.lifetime_mean,
+                                 birth_spread=cfg.birth_spread, q=cfg.process_noise,
+                                 noise_form=cfg.noise_form)
     raise ValueError(f"unknown target kind {cfg.kind!r}")

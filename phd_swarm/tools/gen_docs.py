@@ -146,10 +146,12 @@ SCENARIO_MEANINGS: dict[str, str] = {
                     "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4).",
     "targets.count": "static: targets drawn (those outside E are dropped); dames_walk: "
                      "initial number; clustered_walk: sum of per_cluster; turning_walk: "
-                     "number.",
+                     "number; ncv: targets over the run (born at their birth times).",
     "targets.draw_box": "static: the square targets are drawn from, (xmin, ymin, xmax, "
-                        "ymax) [m]; turning_walk: where they start.",
-    "targets.speed": "dames_walk: forward speed [m/s]; turning_walk: speed [m/s].",
+                        "ymax) [m]; turning_walk: where they start; ncv: where they appear "
+                        "(spawn uniform; default the map).",
+    "targets.speed": "dames_walk: forward speed [m/s]; turning_walk: speed [m/s]; ncv: speed "
+                     "per axis [m/s] along a random heading.",
     "targets.heading_sd": "dames_walk: s.d. of each heading change [rad].",
     "targets.heading_rate": "dames_walk: heading updates per second [Hz]; dt x "
                             "heading_rate must be whole.",
@@ -162,6 +164,12 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "targets.step_sd": "clustered_walk: per-axis s.d. of the walk's velocity [m/s].",
     "targets.max_speed": "clustered_walk: speed cap [m/s].",
     "targets.turn_every": "turning_walk: seconds between two random headings [s].",
+    "targets.spawn": "ncv: targets appear at the centre of the map or uniformly in draw_box.",
+    "targets.lifetime_mean": "ncv: mean lifetime, geometric [s] (Papaioannou: 60, Fig. 5: 30).",
+    "targets.birth_spread": "ncv: birth times uniform over [0, birth_spread) [s]; 0: all at "
+                            "the start.",
+    "targets.process_noise": "ncv: q of the NCV process noise [m^2/s^3] (Papaioannou: 1).",
+    "targets.noise_form": "ncv: standard NCV Q, or the printed [[T/3, T/2], [T/2, T]].",
     "targets.layout_seed": "static: if set, targets drawn from this seed alone, the same in "
                            "every run (Shirsat & Berman Table 1); unset: from the run's seed.",
     "extraction_threshold": "Target-extraction threshold as a density [targets/m^2]; the "

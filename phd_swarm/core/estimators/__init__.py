@@ -1,3 +1,3 @@
 """Estimators: the built-in ones register on import (:mod:`phd_swarm.core.registry`)."""
 
-from . import grid_phd, shirsat, sung  # noqa: F401  (registration)
+from . import grid_phd, papaioannou, shirsat, sung  # noqa: F401  (registration)

@@ -6,4 +6,4 @@ injects lossy links into any exchange's traffic; :mod:`.voronoi_phd` is Dames' e
 reward sets between robots that meet (who meets whom: :mod:`.radio`).
 """
 
-from . import meet_merge, none, voronoi_phd  # noqa: F401  (registration)
+from . import meet_merge, none, sat_share, voronoi_phd  # noqa: F401  (registration)

@@ -1,0 +1,293 @@
+"""Papaioannou et al.'s SAT density: a particle PHD of the true targets and a search map.
+
+Registered as the ``papaioannou_sat`` estimator (:mod:`phd_swarm.core.registry`). Each agent
+propagates the searching-and-tracking (SAT) density of Sec. V-A, which has two parts:
+
+- the target density on true targets, eq. 6 and 8: the particle (SMC) PHD filter of Vo,
+  Singh & Doucet (2005, :mod:`.smc_phd`) with the state ``[x, y, vx, vy]`` (positions first,
+  the repository's convention; the paper orders it ``[x, vx, y, vy]``), the NCV motion of
+  Sec. VI-A (F, Q with T = dt), survival p_S = 0.99, the range-bearing likelihood with
+  range-dependent noise, p_D = p_D^max inside the agent's square and 0 outside (eq. 5), and
+  the plane-uniform clutter of the ``square_range_bearing`` sensor; births "distributed
+  inside the agent sensing area with average rate of 3 births per time-step": each update
+  first adds the birth intensity ``birth_mass`` spread uniformly over the square S_a(s_k)
+  of the step's position, velocities uniform in ``[-birth_speed, birth_speed]^2``
+  (``birth_newborn``: they take no missed-detection term, Ristic et al. 2012, so births
+  nobody measured vanish at once). Its particles are drawn where the step's measurements
+  are and weighted by importance (``births: measurement``, :meth:`PapaioannouEstimator.
+  _births_near`): the bearing is measured to 1 degree, 7 cm across at 4 m, so births drawn
+  uniformly over 100 m^2 (``births: uniform``) put almost none in the likelihood's peak;
+  estimates by measurement (Ristic, Clark & Vo 2010: a measurement whose particles that
+  existed before the scan took weight > 0.5 gives the weighted mean of the particles'
+  states; ``estimates_from: all`` counts the births' weight too);
+- the search density on virtual targets, eq. 7, 9, 10 (:mod:`phd_swarm.core.search_map`):
+  one search value per node of the search map, decayed by J outside the previous square and
+  set to 1 inside the current one; the exchange max-merges the values of the agents met
+  (:meth:`PapaioannouEstimator.merge_search`).
+
+The controller reads the particles, the estimates and their one-step prediction
+(:meth:`PapaioannouEstimator.predicted_states`) and the search values.
+
+Reference: S. Papaioannou et al., "A cooperative multi-agent probabilistic framework for
+search and track missions", IEEE T-CNS, Sec. V-A, VI-A.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import registry
+from .. import search_map as sm
+from ..params import ParamSpec
+from ..scan import Scan
+from .base import Estimator
+from .checks import check_measurements
+from .range_bearing import RangeBearingSensor
+from .smc_models import linear_gaussian_transition
+from .smc_phd import ParticleSet, extract_by_measurement, predict, resample, update
+
+#: Stream of the estimators' own generators (particles), apart from the robots' and the
+#: world's (``SeedSequence(seed, spawn_key=(ESTIMATOR_STREAM, robot_id))``).
+ESTIMATOR_STREAM = 20
+
+OPTIONS = (
+    ParamSpec("survival_probability", 0.99, "papaioannou_sat: p_S per step (Sec. VI-A: 0.99)",
+              low=0.0, high=1.0),
+    ParamSpec("process_noise", 1.0, "papaioannou_sat: q of the NCV model's Q [m^2/s^3] "
+              "(Sec. VI-A prints Q for q = 1)", low=0.0),
+    ParamSpec("birth_mass", 3.0, "papaioannou_sat: expected births per step, uniform over the "
+              "agent's sensing square (Sec. VI-A: 3)", low=0.0),
+    ParamSpec("birth_speed", 2.0, "papaioannou_sat: births' velocities uniform in [-v, v]^2 "
+              "[m/s] (not stated; the targets move at 1 m/s per axis)", low=0.0),
+    ParamSpec("births", "measurement", "papaioannou_sat: the uniform birth intensity's "
+              "particles drawn near the step's measurements, importance-weighted "
+              "(measurement), or uniformly over the sensing square (uniform)",
+              choices=("measurement", "uniform")),
+    ParamSpec("birth_newborn", True, "papaioannou_sat: births take no missed-detection term "
+              "(Ristic et al. 2012); false: the plain PHD update of eq. 8"),
+    ParamSpec("particles_per_target", 300, "papaioannou_sat: particles per expected target "
+              "after resampling (and per unit of birth mass)", low=1),
+    ParamSpec("max_particles", 6000, "papaioannou_sat: most particles after resampling",
+              low=1),
+    ParamSpec("estimates_from", "persistent", "papaioannou_sat: a measurement gives an "
+              "estimate when the particles that existed before the scan took weight > 0.5 "
+              "(persistent: a new target is reported from its second detection) or when all "
+              "particles did (all, births included)", choices=("persistent", "all")),
+    ParamSpec("node_size", 5.0, "papaioannou_sat: side of a search-map region r_v [m] (not "
+              "stated; half the sensing square)", low=0.0),
+    ParamSpec("search_decay", 0.999, "papaioannou_sat: J, the search values' decay per step "
+              "outside the sensing square (eq. 7; Sec. VI-A: 0.999)", low=0.0, high=1.0),
+)
+
+
+@dataclass(frozen=True, eq=False)
+class PapaioannouSetup:
+    """What every agent's estimator shares (see the module docstring).
+
+    Attributes
+    ----------
+    dt : float
+        Step T [s].
+    f, q : np.ndarray, shape (4, 4)
+        NCV transition and process noise in the order ``[x, y, vx, vy]``.
+    p_s : float
+    sensor : Any
+        The ``square_range_bearing`` sensor's models (side, p_D, clutter, RangeBearingSensor).
+    grid : phd_swarm.core.search_map.SearchGrid
+    decay : float
+    birth_mass, birth_speed : float
+    birth_newborn : bool
+    per_target, max_particles : int
+    seed : int
+        The run's seed, for the estimators' own generators.
+    """
+
+    dt: float
+    f: np.ndarray
+    q: np.ndarray
+    p_s: float
+    sensor: Any
+    grid: sm.SearchGrid
+    decay: float
+    birth_mass: float
+    birth_speed: float
+    birth_newborn: bool
+    per_target: int
+    max_particles: int
+    seed: int = 0
+    confirmed_only: bool = True
+    measurement_births: bool = True
+
+
+def ncv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """F and Q of the NCV model (Sec. VI-A) for the state ``[x, y, vx, vy]``."""
+    f = np.eye(4)
+    f[0, 2] = f[1, 3] = dt
+    qq = np.zeros((4, 4))
+    qq[:2, :2] = q * dt ** 3 / 3.0 * np.eye(2)
+    qq[:2, 2:] = qq[2:, :2] = q * dt ** 2 / 2.0 * np.eye(2)
+    qq[2:, 2:] = q * dt * np.eye(2)
+    return f, qq
+
+
+class PapaioannouEstimator(Estimator):
+    """One agent's SAT density (see the module docstring).
+
+    Parameters
+    ----------
+    setup : PapaioannouSetup
+    robot_id : int
+    rng : np.random.Generator
+        Source of the particles' randomness (motion, births, resampling).
+    """
+
+    def __init__(self, setup: PapaioannouSetup, robot_id: int,
+                 rng: np.random.Generator) -> None:
+        self.setup = setup
+        self.robot_id = int(robot_id)
+        self.rng = rng
+        self.particles = ParticleSet.empty(4)
+        self._transition = linear_gaussian_transition(setup.f, setup.q)
+        self._sensor: RangeBearingSensor = setup.sensor.model
+        #: Search values p_v of the map's nodes (eq. 10), 0 = never searched.
+        self.search = sm.initial_values(setup.grid)
+        self._position: np.ndarray | None = None
+        self._states = np.empty((0, 4))
+        self.step = -1
+
+    # ------------------------------------------------------------------ filter
+    def predict(self) -> None:
+        """Eq. 6 for the survivors (NCV motion, p_S); births come with the scan (eq. 6's b_k)."""
+        self.particles = predict(self.particles, self._transition, self.setup.p_s, None,
+                                 self.rng)
+
+    def update(self, scan: Scan) -> None:
+        """Births in S_a(s_k), eq. 8, resampling, estimates; eq. 7 and 9 on the search map."""
+        s = self.setup
+        sensor = scan.sensor
+        z = check_measurements(scan.z, 2)
+        born = (self._births_near(z, sensor) if s.measurement_births
+                else self._births(sensor))
+        particles = ParticleSet.concatenate([self.particles, born]) if len(born) else \
+            self.particles
+        states = particles.states
+        p_d = np.where(s.sensor.inside(states[:, :2], sensor), s.sensor.p_d, 0.0)
+        result = update(particles, z, lambda zz, x: self._sensor.log_likelihood(
+            zz, x[:, :2], sensor), p_d, s.sensor.clutter_intensity(z, sensor))
+        if s.confirmed_only:
+            # Ristic, Clark & Vo (2010): a measurement explained by particles that existed
+            # before this scan (U(z) > 0.5) gives an estimate; births report a step later.
+            self._states = result.detection_means[result.persistent_mass > 0.5].copy()
+        else:
+            self._states = extract_by_measurement(result)
+        self.particles = resample(result.particles, self.rng, per_target=s.per_target,
+                                  min_particles=s.per_target, max_particles=s.max_particles)
+        previous = sensor if self._position is None else self._position
+        self.search = sm.update(sm.predict(self.search, s.grid, previous, s.decay), s.grid,
+                                sensor)
+        self._position = np.array(sensor, dtype=float)
+        self.step = int(scan.step)
+
+    def _births_near(self, z: np.ndarray, sensor: np.ndarray) -> ParticleSet:
+        """The uniform birth intensity of :meth:`_births`, sampled where the measurements are.
+
+        Positions are drawn from the mixture q(x) = (1/M) sum_m N(x; p(z_m), C(z_m)) of the
+        positions the M measurements imply (:meth:`~.range_bearing.RangeBearingSensor.
+        to_positions`), velocities from the birth's own uniform law; each particle's weight
+        is the importance ratio ``b(x) / (q(x) N)`` with b the uniform birth density over
+        the square (``birth_mass / a^2`` per m^2), so the births' intensity is b in
+        expectation, with particles only where a measurement can give them weight. With
+        ``birth_newborn`` (no missed-detection term) the births nothing measured would
+        vanish in the update anyway, so nothing is lost by not drawing them.
+        """
+        s = self.setup
+        m = len(z)
+        if m == 0 or s.birth_mass == 0.0:
+            return ParticleSet.empty(4)
+        n = s.per_target
+        pos, cov = self._sensor.to_positions(z, sensor)
+        chol = np.linalg.cholesky(cov)                                    # (M, 2, 2)
+        e = self.rng.standard_normal((m, n, 2))
+        x = (pos[:, None, :] + np.einsum("mij,mnj->mni", chol, e)).reshape(-1, 2)
+        vel = (2.0 * self.rng.random((m * n, 2)) - 1.0) * s.birth_speed
+        d = x[:, None, :] - pos[None, :, :]                               # (N, M, 2)
+        inv = np.linalg.inv(cov)
+        maha = np.einsum("nmi,mij,nmj->nm", d, inv, d)
+        dens = np.exp(-0.5 * maha) / (2.0 * np.pi * np.sqrt(np.linalg.det(cov)))
+        q = dens.mean(axis=1)                                             # (N,)
+        inside = s.sensor.inside(x, sensor)
+        b = s.birth_mass / s.sensor.side ** 2
+        w = np.where(inside, b / (q * m * n), 0.0)
+        return ParticleSet(w, np.concatenate([x, vel], axis=1),
+                           np.full(m * n, bool(s.birth_newborn)))
+
+    def _births(self, sensor: np.ndarray) -> ParticleSet:
+        s = self.setup
+        n = int(round(s.birth_mass * s.per_target))
+        if n == 0 or s.birth_mass == 0.0:
+            return ParticleSet.empty(4)
+        u = self.rng.random((n, 4))
+        half = 0.5 * s.sensor.side
+        states = np.concatenate([sensor + (2.0 * u[:, :2] - 1.0) * half,
+                                 (2.0 * u[:, 2:] - 1.0) * s.birth_speed], axis=1)
+        return ParticleSet(np.full(n, s.birth_mass / n), states,
+                           np.full(n, bool(s.birth_newborn)))
+
+    # --------------------------------------------------------------- readings
+    def estimate_states(self) -> np.ndarray:
+        """X^_k, the extracted states ``[x, y, vx, vy]`` (K, 4)."""
+        return self._states.copy()
+
+    def estimates(self) -> np.ndarray:
+        """X^_k positions (K, 2) [m]."""
+        return self._states[:, :2].copy()
+
+    def predicted_states(self) -> np.ndarray:
+        """X^_{k+1|k}: the estimates moved by F without noise (K, 4) (the mean prediction)."""
+        return self._states @ self.setup.f.T
+
+    def expected_count(self) -> float:
+        """The particles' total weight (the PHD's mass)."""
+        return self.particles.mass
+
+    def merge_search(self, values: np.ndarray) -> None:
+        """Max-merge another agent's search values into this one's (Sec. V-B c)."""
+        self.search = sm.max_merge(self.search, sm.check_values(values, self.search.size,
+                                                                "search values"))
+
+    def export_state(self) -> dict[str, np.ndarray]:
+        """The particles as arrays (:meth:`.smc_phd.ParticleSet.to_arrays`)."""
+        return self.particles.to_arrays()
+
+
+def _setup(scenario: Any, system: Any, **runtime: Any) -> PapaioannouSetup:
+    opt = {spec.name: system.option(spec.name) for spec in OPTIONS}
+    sensor = system.parts()["sensor"].setup(scenario, system)
+    env = scenario.env
+    f, q = ncv_model(float(scenario.dt), float(opt["process_noise"]))
+    grid = sm.SearchGrid(env.xmin, env.ymin, env.xmax, env.ymax, float(opt["node_size"]),
+                         float(sensor.side))
+    return PapaioannouSetup(float(scenario.dt), f, q, float(opt["survival_probability"]),
+                            sensor, grid, float(opt["search_decay"]), float(opt["birth_mass"]),
+                            float(opt["birth_speed"]), bool(opt["birth_newborn"]),
+                            int(opt["particles_per_target"]), int(opt["max_particles"]),
+                            int(scenario.seed), opt["estimates_from"] == "persistent",
+                            opt["births"] == "measurement")
+
+
+def _make(setup: PapaioannouSetup, robot_id: int) -> PapaioannouEstimator:
+    rng = np.random.default_rng(np.random.SeedSequence(
+        setup.seed, spawn_key=(ESTIMATOR_STREAM, int(robot_id))))
+    return PapaioannouEstimator(setup, robot_id, rng)
+
+
+registry.register(
+    "estimator", "papaioannou_sat", _make, setup=_setup,
+    description="SAT density: a particle PHD of the targets (NCV, range-bearing, births in "
+                "the sensing square) and the search values of a search map (Papaioannou et "
+                "al. Sec. V-A, eq. 6-10).",
+    options=OPTIONS, provides=("particles", "search_map"),
+    requires=("square_fov", "range_bearing_measurement"))

@@ -1,0 +1,121 @@
+"""Square field of view, range-bearing measurements (Papaioannou et al. Sec. IV-C, VI-A).
+
+Registered as the ``square_range_bearing`` sensor (:mod:`phd_swarm.core.registry`). An agent
+at s senses the closed axis-aligned square S_a(s) of side a centred on it (eq. 5: 10 m); a
+target inside is detected with probability p_D^max (0.99) and measured as
+``z = h(x, s) + v``, range [m] and bearing [rad] with range-dependent noise sds
+(:class:`~phd_swarm.core.estimators.range_bearing.RangeBearingSensor`: zeta0 = 1 m,
+beta_zeta = 5e-5, phi0 = pi/180 rad, beta_phi = 1e-5 rad/m). Clutter: a Poisson number of
+points (mean ``clutter_rate``, 10) uniform over the sensing square in the plane, each
+measured without noise; the filter's intensity for it in (r, phi) is
+:func:`~phd_swarm.core.estimators.range_bearing.clutter_density_square` (docs/decisions.md:
+"uniform over the measurement space" read as uniform over the area the sensor sees).
+
+Measurements are (range, bearing) pairs, shape (M, 2), not positions: only estimators that
+require ``range_bearing_measurement`` can take them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import registry
+from ..estimators.range_bearing import RangeBearingSensor, clutter_density_square
+from ..params import ParamSpec
+
+OPTIONS = (
+    ParamSpec("sensing_side", 10.0, "square_range_bearing: side a of the square sensing area "
+              "[m] (eq. 5; Sec. VI-A: 10)", low=0.0),
+    ParamSpec("p_d_max", 0.99, "square_range_bearing: detection probability inside the "
+              "square (eq. 5; Sec. VI-A: 0.99)", low=0.0, high=1.0),
+    ParamSpec("clutter_rate", 10.0, "square_range_bearing: expected clutter points per scan, "
+              "uniform over the sensing square (Sec. VI-A: 10)", low=0.0),
+    ParamSpec("range_sd", 1.0, "square_range_bearing: zeta0, range noise sd at zero range "
+              "[m] (Sec. VI-A: 1)", low=0.0),
+    ParamSpec("range_sd_slope", 5e-5, "square_range_bearing: beta_zeta, growth of the range "
+              "sd per metre of range (Sec. VI-A: 5e-5)", low=0.0),
+    ParamSpec("bearing_sd", float(np.pi / 180.0), "square_range_bearing: phi0, bearing noise "
+              "sd at zero range [rad] (Sec. VI-A: pi/180)", low=0.0),
+    ParamSpec("bearing_sd_slope", 1e-5, "square_range_bearing: beta_phi, growth of the "
+              "bearing sd [rad/m] (Sec. VI-A: 1e-5)", low=0.0),
+)
+
+
+@dataclass(frozen=True)
+class SquareRangeBearing:
+    """The sensor's models (see the module docstring).
+
+    Attributes
+    ----------
+    side : float
+        Side a of the sensing square [m], > 0.
+    p_d : float
+        p_D^max inside the square [-].
+    clutter_rate : float
+        Expected clutter points per scan [-], >= 0.
+    model : RangeBearingSensor
+        h(x, s) and the range-dependent noise.
+    """
+
+    side: float = 10.0
+    p_d: float = 0.99
+    clutter_rate: float = 10.0
+    model: RangeBearingSensor = field(default_factory=RangeBearingSensor)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.side) and self.side > 0.0):
+            raise ValueError(f"square_range_bearing: sensing_side must be > 0 m, "
+                             f"got {self.side!r}")
+        if not 0.0 <= self.p_d <= 1.0:
+            raise ValueError(f"square_range_bearing: p_d_max must lie in [0, 1], "
+                             f"got {self.p_d!r}")
+        if not (np.isfinite(self.clutter_rate) and self.clutter_rate >= 0.0):
+            raise ValueError(f"square_range_bearing: clutter_rate must be >= 0, "
+                             f"got {self.clutter_rate!r}")
+
+    def inside(self, points: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        """Which points (N, 2) [m] lie in the closed square S_a(sensor) (eq. 5), (N,) bool."""
+        d = np.abs(np.asarray(points, dtype=float).reshape(-1, 2)
+                   - np.asarray(sensor, dtype=float).reshape(2))
+        return (d <= 0.5 * self.side).all(axis=1)
+
+    def clutter_intensity(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+        """kappa(z) (M,) [1/(m rad)] of plane-uniform clutter over the square."""
+        return clutter_density_square(z, sensor, self.side, self.clutter_rate)
+
+
+def simulate_scan(rng: np.random.Generator, sensor_model: SquareRangeBearing,
+                  sensor: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """One measurement set (M, 2) of (range [m], bearing [rad]): detections, then clutter.
+
+    Draws, in this order: one ``random(N)`` (detections), one ``standard_normal((D, 2))``
+    (noise of the D detections), one ``poisson`` (clutter count C), one ``random((C, 2))``
+    (clutter positions, uniform in the square).
+    """
+    s = np.asarray(sensor, dtype=float).reshape(-1)[:2]
+    x = np.asarray(targets, dtype=float).reshape(-1, 2)
+    p_d = np.where(sensor_model.inside(x, s), sensor_model.p_d, 0.0)
+    detected = rng.random(len(x)) < p_d
+    hits = sensor_model.model.simulate(rng, x[detected], s)
+    n = rng.poisson(sensor_model.clutter_rate)
+    clutter = s + (rng.random((n, 2)) - 0.5) * sensor_model.side
+    return np.concatenate([hits, sensor_model.model.measure(clutter, s)], axis=0)
+
+
+def _setup(scenario, system, **runtime) -> SquareRangeBearing:
+    opt = {spec.name: system.option(spec.name) for spec in OPTIONS}
+    return SquareRangeBearing(
+        float(opt["sensing_side"]), float(opt["p_d_max"]), float(opt["clutter_rate"]),
+        RangeBearingSensor(float(opt["range_sd"]), float(opt["range_sd_slope"]),
+                           float(opt["bearing_sd"]), float(opt["bearing_sd_slope"])))
+
+
+registry.register(
+    "sensor", "square_range_bearing", lambda sensor_model, rid: sensor_model, setup=_setup,
+    description="Square field of view, p_D inside, range and bearing with range-dependent "
+                "noise, Poisson clutter uniform over the square (Papaioannou et al. Sec. IV-C, "
+                "VI-A).",
+    options=OPTIONS, provides=("square_fov", "range_bearing_measurement"),
+    simulate=simulate_scan)

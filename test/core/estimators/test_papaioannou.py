@@ -1,0 +1,81 @@
+"""Papaioannou et al.'s SAT density: the particle PHD of the targets and the search map."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from phd_swarm.core import registry
+from phd_swarm.core import search_map as sm
+from phd_swarm.core.estimators.papaioannou import PapaioannouEstimator, ncv_model
+from phd_swarm.core.scan import Scan
+from phd_swarm.core.sensors.square_range_bearing import simulate_scan
+from phd_swarm.sim.scenario import PRESETS
+
+
+def _estimator(robot_id=0, **options):
+    sc = PRESETS["papaioannou"]()
+    sc = sc.with_overrides(system=sc.system.with_parts(options=options))
+    part = registry.lookup("estimator", "papaioannou_sat")
+    return part.make(part.setup(sc, sc.system), robot_id), sc
+
+
+def test_the_part_reads_the_sensor_and_its_options():
+    est, sc = _estimator()
+    s = est.setup
+    assert isinstance(est, PapaioannouEstimator)
+    assert (s.p_s, s.birth_mass, s.decay, s.per_target) == (0.99, 3.0, 0.999, 300)
+    assert (s.sensor.side, s.sensor.p_d, s.sensor.clutter_rate) == (10.0, 0.99, 10.0)
+    assert s.grid.size == 400 and s.grid.side == 10.0              # 5 m nodes on 100 m
+    f, q = ncv_model(1.0, 1.0)
+    np.testing.assert_array_equal(s.f, f)
+    np.testing.assert_allclose(q[[0, 0, 2], [0, 2, 2]], [1 / 3, 1 / 2, 1.0])
+
+
+@pytest.mark.parametrize("clutter", [0.0, 10.0])
+def test_a_target_in_view_is_estimated_from_its_second_detection_on(clutter):
+    """A slow target 2-3 m from the agent (q = 0.01: nearly constant velocity)."""
+    est, _ = _estimator(process_noise=0.01, clutter_rate=clutter)
+    rng = np.random.default_rng(4)
+    x = np.array([52.0, 50.0, -0.1, 0.1])
+    s = np.array([50.0, 50.0])
+    counts, errors = [], []
+    for k in range(12):
+        est.predict()
+        est.update(Scan(0, k, s, simulate_scan(rng, est.setup.sensor, s, x[None, :2])))
+        counts.append(len(est.estimates()))
+        if counts[-1]:
+            errors.append(np.min(np.hypot(*(est.estimates() - x[:2]).T)))
+        x = x + np.r_[x[2:], 0.0, 0.0]
+    assert counts[0] == 0                                      # births report a step later
+    assert sum(c >= 1 for c in counts[1:]) >= 7
+    assert np.median(errors) < 1.5                             # the range sd is 1 m
+    pred = est.predicted_states()
+    np.testing.assert_allclose(pred, est.estimate_states() @ est.setup.f.T)
+
+
+def test_the_search_map_follows_eq_7_and_9_and_merges_by_max():
+    est, _ = _estimator()
+    grid = est.setup.grid
+    first, second = np.array([12.5, 12.5]), np.array([32.5, 12.5])
+    est.predict()
+    est.update(Scan(0, 0, first, np.empty((0, 2))))
+    np.testing.assert_array_equal(est.search, grid.inside(first).astype(float))
+    est.predict()
+    est.update(Scan(0, 1, second, np.empty((0, 2))))
+    expect = sm.update(sm.predict(grid.inside(first).astype(float), grid, first, 0.999), grid,
+                       second)
+    np.testing.assert_array_equal(est.search, expect)
+    other = np.zeros(grid.size)
+    other[-1] = 0.5
+    est.merge_search(other)
+    assert est.search[-1] == 0.5 and est.search.max() == 1.0
+    with pytest.raises(ValueError, match="search values"):
+        est.merge_search(np.zeros(3))
+
+
+def test_each_agent_draws_from_its_own_stream():
+    a, _ = _estimator(0)
+    b, _ = _estimator(1)
+    c, _ = _estimator(0)
+    assert a.rng.random() == c.rng.random() != b.rng.random()
