@@ -34,11 +34,8 @@ import numpy as np
 from .. import registry
 from ..params import ParamSpec
 from ..scan import CDR_HEADER, CDR_POINT
-from .base import Envelope, Exchange
+from .contacts import TIMEOUT_TICKS, ContactExchange
 from .radio import RangeRadio, SameNodeRadio
-
-#: Rounds without news before the contacts not heard from are given up for the step.
-TIMEOUT_TICKS = 5
 
 OPTIONS = (
     ParamSpec("radio", "same_node", "meet_merge: who hears whom: robots on the same grid node "
@@ -64,7 +61,7 @@ class RewardMsg:
         return CDR_HEADER + 4 + 4 + 4 + 4 + CDR_POINT * len(self.points)
 
 
-class MeetMerge(Exchange):
+class MeetMerge(ContactExchange):
     """One robot's side of meet-and-merge (see the module docstring).
 
     Parameters
@@ -76,24 +73,15 @@ class MeetMerge(Exchange):
         Rounds without news before the missing contacts are given up for the step.
     """
 
+    MESSAGE = RewardMsg
+    NAME = "meet_merge"
+
     def __init__(self, robot_id: int, radio: RangeRadio,
                  timeout_ticks: int = TIMEOUT_TICKS) -> None:
-        self.robot_id = int(robot_id)
-        self.radio = radio
-        self.timeout_ticks = int(timeout_ticks)
-        self.estimator: Any = None
-        self._step = -1
-        self._team: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._waiting: set[int] = set()
-        self._got: dict[int, dict[int, np.ndarray]] = {}
-        self._quiet = 0
-        self._done = True
-        #: The contacts of the current (last) step, ascending.
-        self.contacts: np.ndarray = np.empty(0, dtype=np.int64)
+        super().__init__(robot_id, radio, timeout_ticks)
         #: The robots whose sets were merged at the current (last) step, ascending.
         self.met: np.ndarray = np.empty(0, dtype=np.int64)
-        #: Counters: meetings (steps with a contact), messages sent, timeouts.
-        self.stats: dict[str, int] = {"meetings": 0, "sent": 0, "timeouts": 0}
+        self._points = np.empty((0, 2))
 
     def bind_estimator(self, estimator: Any) -> None:
         """The robot's estimator, whose reward set travels (``reward_set``, ``merge_rewards``)."""
@@ -102,94 +90,19 @@ class MeetMerge(Exchange):
                              f"(reward_set, merge_rewards); {type(estimator).__name__} has none")
         self.estimator = estimator
 
-    # ----------------------------------------------------------------- membership
-    def initialise(self, ids: np.ndarray, positions: np.ndarray) -> None:
-        """Nothing to set up: the radio reads the team state of every step."""
-
-    def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
-        """The world's team state of ``step``: who is alive, and where (for the radio)."""
-        self._team = (np.asarray(ids), np.asarray(positions, dtype=float),
-                      np.asarray(alive, dtype=bool))
-
-    def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
-               alive: np.ndarray) -> None:
-        """Back in the team at ``step``: the reward set is the robot's own, kept."""
-        self.observe_team(step, ids, positions, alive)
-
-    # ---------------------------------------------------------------------- step
-    def start_step(self, step: int, position: np.ndarray, power_weight: float,
-                   z: np.ndarray) -> list[Envelope]:
-        """Send M_k to the robots the radio reaches at ``step``; done at once without any."""
-        if self.estimator is None:
-            raise RuntimeError("meet_merge: no estimator bound (Agent binds it)")
-        if self._team is None:
-            raise RuntimeError("meet_merge: no team state for the step")
-        self._step = int(step)
-        for old in [k for k in self._got if k < self._step]:
-            del self._got[old]
-        self.contacts = self.radio.contacts(self.robot_id, *self._team)
-        self._waiting = set(self.contacts.tolist()) - set(self._got.get(self._step, {}))
-        self._quiet = 0
-        self._done = False
+    def _begin(self, position: np.ndarray) -> None:
         self.met = np.empty(0, dtype=np.int64)
-        if self.contacts.size:
-            self.stats["meetings"] += 1
-        points = self.estimator.reward_set()
-        out = [Envelope(self.robot_id, int(c), RewardMsg(self.robot_id, self._step, points))
-               for c in self.contacts.tolist()]
-        self.stats["sent"] += len(out)
-        self._finish_if_complete()
-        return out
+        self._points = self.estimator.reward_set()
 
-    def receive(self, msg: Any) -> bool:
-        """Keep a contact's set of this step (or of a later one, for that step)."""
-        if not isinstance(msg, RewardMsg) or msg.step < self._step or msg.src == self.robot_id:
-            return False
-        got = self._got.setdefault(int(msg.step), {})
-        if msg.src in got:
-            return False
-        got[int(msg.src)] = np.asarray(msg.points, dtype=float).reshape(-1, 2)
-        if msg.step == self._step:
-            self._waiting.discard(int(msg.src))
-            self._quiet = 0
-        return True
+    def _message(self, contact: int) -> RewardMsg:
+        return RewardMsg(self.robot_id, self._step, self._points)
 
-    def advance(self) -> list[Envelope]:
-        """Merge once every contact's set is in."""
-        self._finish_if_complete()
-        return []
-
-    def tick(self) -> list[Envelope]:
-        """A round without news; give up on silent contacts after ``timeout_ticks``."""
-        if self._done:
-            return []
-        self._quiet += 1
-        if self._quiet >= self.timeout_ticks:
-            self.stats["timeouts"] += len(self._waiting)
-            self._waiting.clear()
-            self._finish_if_complete()
-        return []
-
-    def _finish_if_complete(self) -> None:
-        if self._done or self._waiting:
-            return
-        mine = self._got.get(self._step, {})
-        others = {src: pts for src, pts in mine.items() if src in set(self.contacts.tolist())}
+    def _complete(self, got: dict[int, RewardMsg]) -> None:
+        others = {src: np.asarray(m.points, dtype=float).reshape(-1, 2)
+                  for src, m in got.items()}
         if others:
             self.estimator.merge_rewards(others)
         self.met = np.array(sorted(others), dtype=np.int64)
-        self._done = True
-
-    @property
-    def done(self) -> bool:
-        """Whether the step's merge is done."""
-        return self._done
-
-    @property
-    def step(self) -> int:
-        """The current (or last) step; -1 before the first."""
-        return self._step
 
 
 def _setup(scenario: Any, system: Any, timeout_ticks: int = TIMEOUT_TICKS,

@@ -14,11 +14,9 @@ agent of its own plan. Every map taken is max-merged into the estimator's
 controller reads what came in through :class:`SatView` (``extras["view"]``) and builds the
 joint plan of Alg. 1 with the agents whose maps it received.
 
-One step k of agent r: :meth:`start_step` sends to the contacts of step k (the step is done
-at once without any); :meth:`receive` keeps a contact's message of step k (or of a later
-step, for that step); when every contact's message is in, the maps are merged in id order
-and the step is done; :meth:`tick` gives up on silent contacts after ``timeout_ticks``
-rounds. Messages per agent per step: one per agent in range.
+The step machinery (one message per contact, merged in id order once all are in, a timeout
+for silent contacts) is :class:`.contacts.ContactExchange`'s. Messages per agent per step:
+one per agent in range.
 """
 
 from __future__ import annotations
@@ -31,11 +29,8 @@ import numpy as np
 from .. import registry
 from ..params import ParamSpec
 from ..scan import CDR_HEADER, CDR_POINT
-from .base import Envelope, Exchange
+from .contacts import TIMEOUT_TICKS, ContactExchange
 from .radio import RangeRadio
-
-#: Rounds without news before the contacts not heard from are given up for the step.
-TIMEOUT_TICKS = 5
 
 OPTIONS = (
     ParamSpec("radio_range", 50.0, "sat_share: communication range C_R [m] (Sec. VI-A: 50; "
@@ -97,7 +92,7 @@ class SatView:
     maps_from: tuple[int, ...] = ()
 
 
-class SatShare(Exchange):
+class SatShare(ContactExchange):
     """One agent's side of the exchange (see the module docstring).
 
     Parameters
@@ -107,23 +102,17 @@ class SatShare(Exchange):
     timeout_ticks : int
     """
 
+    MESSAGE = SatMsg
+    NAME = "sat_share"
+
     def __init__(self, robot_id: int, radio: RangeRadio,
                  timeout_ticks: int = TIMEOUT_TICKS) -> None:
-        self.robot_id = int(robot_id)
-        self.radio = radio
-        self.timeout_ticks = int(timeout_ticks)
-        self.estimator: Any = None
+        super().__init__(robot_id, radio, timeout_ticks)
         self.controller: Any = None
-        self._step = -1
-        self._team: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._waiting: set[int] = set()
-        self._got: dict[int, dict[int, SatMsg]] = {}
-        self._quiet = 0
-        self._done = True
         self._members: set[int] = set()
-        self.contacts: np.ndarray = np.empty(0, dtype=np.int64)
+        self._state: tuple[np.ndarray, bool, np.ndarray, tuple[int, ...]] | None = None
         self.view = SatView(-1)
-        self.stats: dict[str, int] = {"contacts": 0, "sent": 0, "maps_sent": 0, "timeouts": 0}
+        self.stats["maps_sent"] = 0
 
     def bind_estimator(self, estimator: Any) -> None:
         """The agent's estimator: its search values travel and take the merged maps."""
@@ -138,109 +127,31 @@ class SatShare(Exchange):
         """The agent's controller: its mode and joint-plan members travel."""
         self.controller = controller
 
-    # ----------------------------------------------------------------- membership
-    def initialise(self, ids: np.ndarray, positions: np.ndarray) -> None:
-        """Nothing to set up: the radio reads the team state of every step."""
-
-    def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
-        """The world's team state of ``step`` (for the radio)."""
-        self._team = (np.asarray(ids), np.asarray(positions, dtype=float),
-                      np.asarray(alive, dtype=bool))
-
-    def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
-               alive: np.ndarray) -> None:
-        """Back in the team at ``step``."""
-        self.observe_team(step, ids, positions, alive)
-
-    # ---------------------------------------------------------------------- step
-    def start_step(self, step: int, position: np.ndarray, power_weight: float,
-                   z: np.ndarray) -> list[Envelope]:
-        """Send this step's message to every agent in range; done at once without any."""
-        if self.estimator is None:
-            raise RuntimeError("sat_share: no estimator bound (Agent binds it)")
-        if self._team is None:
-            raise RuntimeError("sat_share: no team state for the step")
-        self._step = int(step)
-        for old in [k for k in self._got if k < self._step]:
-            del self._got[old]
-        self.contacts = self.radio.contacts(self.robot_id, *self._team)
-        self._waiting = set(self.contacts.tolist()) - set(self._got.get(self._step, {}))
-        self._quiet = 0
-        self._done = False
+    def _begin(self, position: np.ndarray) -> None:
         self.view = SatView(self._step)
-        if self.contacts.size:
-            self.stats["contacts"] += 1
-        tracking = bool(getattr(self.controller, "tracking", False))
         members = tuple(sorted(getattr(self.controller, "plan_members", ()) or ()))
         self._members = set(members)
         predicted = np.asarray(self.estimator.predicted_states(), dtype=float)[:, :2]
-        pos = np.asarray(position, dtype=float).reshape(2).copy()
-        out = []
-        for c in self.contacts.tolist():
-            share = c not in self._members                          # Sec. V-B d
-            values = self.estimator.search.copy() if share else np.empty(0)
-            out.append(Envelope(self.robot_id, int(c), SatMsg(
-                self.robot_id, self._step, pos, tracking, predicted, values, members)))
-            self.stats["maps_sent"] += int(share)
-        self.stats["sent"] += len(out)
-        self._finish_if_complete()
-        return out
+        self._state = (position.copy(), bool(getattr(self.controller, "tracking", False)),
+                       predicted, members)
 
-    def receive(self, msg: Any) -> bool:
-        """Keep a contact's message of this step (or of a later one, for that step)."""
-        if not isinstance(msg, SatMsg) or msg.step < self._step or msg.src == self.robot_id:
-            return False
-        got = self._got.setdefault(int(msg.step), {})
-        if msg.src in got:
-            return False
-        got[int(msg.src)] = msg
-        if msg.step == self._step:
-            self._waiting.discard(int(msg.src))
-            self._quiet = 0
-        return True
+    def _message(self, contact: int) -> SatMsg:
+        position, tracking, predicted, members = self._state
+        share = contact not in self._members                        # Sec. V-B d
+        self.stats["maps_sent"] += int(share)
+        values = self.estimator.search.copy() if share else np.empty(0)
+        return SatMsg(self.robot_id, self._step, position, tracking, predicted, values,
+                      members)
 
-    def advance(self) -> list[Envelope]:
-        """Merge once every contact's message is in."""
-        self._finish_if_complete()
-        return []
-
-    def tick(self) -> list[Envelope]:
-        """A round without news; give up on silent contacts after ``timeout_ticks``."""
-        if self._done:
-            return []
-        self._quiet += 1
-        if self._quiet >= self.timeout_ticks:
-            self.stats["timeouts"] += len(self._waiting)
-            self._waiting.clear()
-            self._finish_if_complete()
-        return []
-
-    def _finish_if_complete(self) -> None:
-        if self._done or self._waiting:
-            return
-        contacts = set(self.contacts.tolist())
-        mine = {src: m for src, m in sorted(self._got.get(self._step, {}).items())
-                if src in contacts}
+    def _complete(self, got: dict[int, SatMsg]) -> None:
         maps = []
-        for src, m in mine.items():
+        for src, m in got.items():
             # A pair exchanges maps only if neither is in a joint plan with the other: the
             # sender checked its side, this checks the receiver's (Sec. V-B d).
             if m.search.size and src not in self._members:
                 self.estimator.merge_search(m.search)
                 maps.append(src)
-        self.view = SatView(self._step, mine, tuple(maps))
-        self._done = True
-
-    @property
-    def done(self) -> bool:
-        """Whether the step's exchange is done."""
-        return self._done
-
-    @property
-    def step(self) -> int:
-        """The current (or last) step; -1 before the first."""
-        return self._step
+        self.view = SatView(self._step, got, tuple(maps))
 
 
 def _setup(scenario: Any, system: Any, timeout_ticks: int = TIMEOUT_TICKS,
