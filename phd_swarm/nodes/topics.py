@@ -7,10 +7,11 @@ world, the monitor, the recorder and peers address a robot's topics that way).
 
 Protocol traffic goes to the receiver's *inbox*: robot ``j`` publishes a message addressed
 to robot ``i`` on ``/robot_<i>/inbox/<kind>``, so a robot subscribes to its exchange's inbox
-kinds (six for Dames', ``rewards`` for Shirsat & Berman's meet-and-merge) whatever the team
-size and receives exactly the messages addressed to it (O(neighbours) per step). Inbox
-topics are reliable and transient-local on the writer side with a short history, so that a
-message written by a publisher created a moment ago (a new contact) still reaches the inbox
+kinds (six for Dames', ``rewards`` for Shirsat & Berman's meet-and-merge, ``sat`` for
+Papaioannou et al.'s agents) whatever the team size and receives exactly the messages
+addressed to it (O(neighbours) per step). Inbox topics are reliable and transient-local on
+the writer side with a short history, so that a message written by a publisher created a
+moment ago (a new contact) still reaches the inbox
 once the two match; readers keep a deep queue so a burst is never overwritten.
 
 The table is rclpy-free on purpose (QoS as names of :mod:`phd_swarm.nodes.qos` profiles) so
@@ -42,6 +43,7 @@ INBOX = {
     "eta_total": "phd_swarm_msgs/msg/EtaTotal",
     "particles": "phd_swarm_msgs/msg/ParticleTransfer",
     "rewards": "phd_swarm_msgs/msg/RewardSet",
+    "sat": "phd_swarm_msgs/msg/SatState",
 }
 
 

@@ -85,6 +85,10 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("inbox/rewards"): "The reward set of a robot on the same node (or "
                                            "in radio range), sent at a renewal epoch "
                                            "(Shirsat & Berman Alg. 2-3).",
+    ROBOT_PATTERN.format("inbox/sat"): "An agent in radio range: its position, mode, "
+                                       "predicted targets, joint-plan members and (by the "
+                                       "event rule) search map (Papaioannou et al. V-B c-d, "
+                                       "V-C b).",
     ROBOT_PATTERN.format("markers"): "Covariance ellipses, targets and confirmed track ids, "
                                      "field of view and planned path, for RViz2 / Foxglove "
                                      "(`robot_markers.RobotMarkers`).",
