@@ -29,6 +29,6 @@ def test_a_short_run_records_every_step_and_the_agents_estimates(tmp_path, recor
     goals = [rec.msg for rec in read_messages(run / "run.mcap",
                                               topics=[T.robot_topic(0, "goal")])]
     moves = [(a.pose.position.x - b.pose.position.x, a.pose.position.y - b.pose.position.y)
-             for a, b in zip(goals[1:], goals[:-1])]
+             for a, b in zip(goals[1:], goals[:-1], strict=True)]
     assert all(dx * dx + dy * dy <= 16.0 + 1e-9 for dx, dy in moves)   # eq. 4: <= 2 x 2 m
     assert summary["messages_per_robot_per_step"] > 0

@@ -45,6 +45,7 @@ from ..params import ParamSpec
 from ..scan import Scan
 from .base import Estimator
 from .checks import check_measurements
+from .papaioannou_figures import step_figures
 from .range_bearing import RangeBearingSensor
 from .smc_models import linear_gaussian_transition
 from .smc_phd import ParticleSet, extract_by_measurement, predict, resample, update
@@ -290,4 +291,4 @@ registry.register(
                 "the sensing square) and the search values of a search map (Papaioannou et "
                 "al. Sec. V-A, eq. 6-10).",
     options=OPTIONS, provides=("particles", "search_map"),
-    requires=("square_fov", "range_bearing_measurement"))
+    requires=("square_fov", "range_bearing_measurement"), figures=step_figures)
