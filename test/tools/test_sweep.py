@@ -311,8 +311,8 @@ BAD = [
     ("robots: [2, two]\n", "robots[1]: expected an integer >= 1"),
     ("trials: 1.5\n", "trials: expected an integer"),
     ("preset: dames_fancy\n", "preset: expected one of ['chen_clustered', 'dames_moving', "
-                              "'dames_static', 'shirsat_berman', 'sung_tokekar'], "
-                              "got 'dames_fancy'"),
+                              "'dames_static', 'papaioannou', 'shirsat_berman', "
+                              "'sung_tokekar'], got 'dames_fancy'"),
     ("methods: {PHD: lloyd}\n", "methods.PHD: unknown controller 'lloyd'"),
     ("methods: {}\n", "methods: expected at least one method"),
     ("methods: {O: {kind: chen_o, cumulative_mode: fancy}}\n",
