@@ -51,7 +51,10 @@ ROBOT_OUTPUTS = ("status", "goal", "estimates")
 #: Robot step topics that a capability of the system's parts brings: (role, capability).
 OUTPUT_OF = {"density": ("estimator", "grid_density"), "cell": ("exchange", "cell"),
              "components": ("estimator", "gaussian_mixture"), "tracks": ("estimator", "tracks"),
-             "reward_set": ("estimator", "reward_set")}
+             "reward_set": ("estimator", "reward_set"),
+             "search_map": ("estimator", "search_map"),
+             "sat_state": ("controller", "sat_modes"),
+             "plan": ("controller", "sat_modes")}
 
 #: Topics of an optional node: absent rather than missing when none holds a message.
 OPTIONAL_PREFIX = "/monitor/"

@@ -17,6 +17,13 @@ topic            type                        when the system's ...
                                              (ellipses, tracks, FoV, path; not a step topic)
 ``reward_set``   ``RewardSet``               estimator provides ``reward_set`` (Shirsat &
                                              Berman M_k, with the robots met at the step)
+``search_map``   ``DensityGrid``             estimator provides ``search_map`` (Papaioannou
+                                             et al.'s search values p_v, one per node)
+``sat_state``    ``SatState``                controller provides ``sat_modes``: tracking
+                                             or searching next, the predicted targets, the
+                                             joint plan's agents (no map: ``search_map``)
+``plan``         ``nav_msgs/Path``           controller provides ``sat_modes``: the next
+                                             goal, then the search plan's nodes
 ===============  ==========================  ============================================
 
 The estimates are the estimator's own (``estimates()``), or for a grid PHD that the exchange
@@ -30,26 +37,31 @@ from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import Point
+from nav_msgs.msg import Path
 from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.core.agent import Agent
 from phd_swarm.core.controllers.base import Decision
+from phd_swarm.core.exchange.sat_share import SatMsg
 from phd_swarm.nodes import convert, gm_convert
 from phd_swarm.nodes.completeness import robot_outputs
 from phd_swarm.nodes.meet_merge_wire import reward_set
 from phd_swarm.nodes.qos import publisher_qos
+from phd_swarm.nodes.sat_share_wire import sat_state
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
     GaussianMixture,
     RewardSet,
+    SatState,
     TargetSet,
     TrackSet,
 )
 
 #: ROS type of each step output a capability brings (goal and status are the node's).
 TYPES = {"density": DensityGrid, "cell": CellPolygon, "estimates": TargetSet,
-         "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet}
+         "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet,
+         "search_map": DensityGrid, "sat_state": SatState, "plan": Path}
 
 
 class RobotOutputs:
@@ -130,6 +142,21 @@ class RobotOutputs:
             self.pubs["reward_set"].publish(reward_set(
                 self.robot_id, k, est.reward_set(), self.dt, self.frame_id,
                 getattr(ex, "met", ())))
+        if "search_map" in self.pubs:
+            grid = est.setup.grid.grid
+            self.pubs["search_map"].publish(convert.density_grid(
+                self.robot_id, k, grid, np.arange(grid.size), est.search, self.dt,
+                self.frame_id))
+        if "sat_state" in self.pubs:
+            ctl = self.agent.controller
+            self.pubs["sat_state"].publish(sat_state(SatMsg(
+                self.robot_id, k, np.asarray(self.agent.position, dtype=float),
+                bool(ctl.tracking), est.predicted_states()[:, :2], np.empty(0),
+                tuple(ctl.plan_members)), self.dt, self.frame_id))
+        if "plan" in self.pubs:
+            self.pubs["plan"].publish(Path(header=h, poses=[
+                convert.pose_stamped(q, k, self.dt, self.frame_id)
+                for q in self.agent.controller.planned_path()]))
         if self.markers is not None:
             self.markers_pub.publish(self.markers.build(
                 convert.stamp(k, self.dt), self.agent.position, mixture, tracks,

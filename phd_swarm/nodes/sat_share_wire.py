@@ -2,7 +2,8 @@
 
 An agent's state of a step (:class:`phd_swarm.core.exchange.sat_share.SatMsg`: position,
 mode, predicted targets, search map by the event rule, joint-plan members) travels to each
-agent in radio range as a ``phd_swarm_msgs/SatState`` on ``/robot_<dst>/inbox/sat``.
+agent in radio range as a ``phd_swarm_msgs/SatState`` on ``/robot_<dst>/inbox/sat``; the
+same type carries the agent's own state of the step on ``sat_state`` (:mod:`.robot_outputs`).
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ MAX_PREDICTED = 10_000
 MAX_NODES = 1_000_000
 
 
-def _to_ros(msg: SatMsg, dt: float, frame_id: str) -> SatState:
+def sat_state(msg: SatMsg, dt: float, frame_id: str) -> SatState:
+    """A ``SatState`` of ``msg`` (what travels on inbox/sat, and the agent's own sat_state)."""
     return SatState(header=header(msg.step, dt, frame_id), source_id=int(msg.src),
                     step=int(msg.step), position=points(msg.position)[0],
                     tracking=bool(msg.tracking), predicted=points(msg.predicted),
@@ -41,5 +43,5 @@ def _from_ros(msg: SatState, grid, max_measurements: int) -> SatMsg:
                   tuple(int(i) for i in msg.plan_members))
 
 
-WIRE = Wire(types={"sat": SatState}, kind=lambda msg: "sat", to_ros=_to_ros,
+WIRE = Wire(types={"sat": SatState}, kind=lambda msg: "sat", to_ros=sat_state,
             from_ros=_from_ros, sender=lambda msg: msg.src, addressee=lambda msg: None)

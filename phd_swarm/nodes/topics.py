@@ -91,6 +91,12 @@ ROBOT_TOPICS = {
                 "once per step (Gaussian-mixture estimators)"),
     "reward_set": ("phd_swarm_msgs/msg/RewardSet", "STEP", "robot",
                    "once per step (estimators with reward sets)"),
+    "search_map": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot",
+                   "once per step (estimators with a search map)"),
+    "sat_state": ("phd_swarm_msgs/msg/SatState", "STEP", "robot",
+                  "once per step (search-and-track controllers)"),
+    "plan": ("nav_msgs/msg/Path", "STEP", "robot",
+             "once per step (search-and-track controllers)"),
     **{f"inbox/{kind}": (typ, "INBOX", "peers", "per protocol step, from contacts")
        for kind, typ in INBOX.items()},
 }

@@ -85,6 +85,14 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("inbox/rewards"): "The reward set of a robot on the same node (or "
                                            "in radio range), sent at a renewal epoch "
                                            "(Shirsat & Berman Alg. 2-3).",
+    ROBOT_PATTERN.format("search_map"): "The agent's search values p_v, one per node of its "
+                                        "search map (Papaioannou et al. eq. 10), 0 = never "
+                                        "searched, 1 = searched now.",
+    ROBOT_PATTERN.format("sat_state"): "The agent's own state: tracking or searching next, "
+                                       "its predicted targets and joint-plan agents "
+                                       "(Papaioannou et al. Sec. V; no map).",
+    ROBOT_PATTERN.format("plan"): "The agent's next goal, then (searching) the nodes of its "
+                                  "search plan in order (Papaioannou et al. Sec. V-B).",
     ROBOT_PATTERN.format("inbox/sat"): "An agent in radio range: its position, mode, "
                                        "predicted targets, joint-plan members and (by the "
                                        "event rule) search map (Papaioannou et al. V-B c-d, "

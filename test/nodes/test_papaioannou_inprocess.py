@@ -1,8 +1,9 @@
 """Papaioannou et al.'s system as ROS nodes in one process, lockstep, against the engine.
 
 Four agents search and track with a particle PHD and a search map each and exchange their
-state over ``inbox/sat`` with the agents in range: every agent's estimates and goals, the
-messages sent and the monitor's OSPA equal the in-memory engine's bit for bit.
+state over ``inbox/sat`` with the agents in range: every agent's estimates and goals, its
+search maps, modes and joint-plan agents, the messages sent and the monitor's OSPA equal
+the in-memory engine's bit for bit.
 """
 
 from __future__ import annotations
@@ -27,13 +28,15 @@ def test_lockstep_team_equals_in_memory_engine(tmp_path):
     from phd_swarm.nodes import convert
     from phd_swarm.nodes import topics as T
     from phd_swarm.testing import InProcessRos, start_swarm
-    from phd_swarm_msgs.msg import TargetSet
+    from phd_swarm_msgs.msg import DensityGrid, SatState, TargetSet
 
     scenario = load_run_config(ROOT / "config" / "papaioannou_small.yaml").scenario
     scenario = scenario.with_overrides(duration=float(STEPS))
     robots = range(scenario.robots)
     estimates = {r: {} for r in robots}
     goals = {r: [] for r in robots}
+    maps = {r: {} for r in robots}
+    states = {r: {} for r in robots}
     with InProcessRos(executor="events") as ros:
         probe = ros.node("probe")
         for r in robots:
@@ -41,6 +44,10 @@ def test_lockstep_team_equals_in_memory_engine(tmp_path):
                                       lambda m, r=r: estimates[r].setdefault(m.step, m), 100)
             probe.create_subscription(PoseStamped, T.robot_topic(r, "goal"),
                                       lambda m, r=r: goals[r].append(m), 100)
+            probe.create_subscription(DensityGrid, T.robot_topic(r, "search_map"),
+                                      lambda m, r=r: maps[r].setdefault(m.step, m), 100)
+            probe.create_subscription(SatState, T.robot_topic(r, "sat_state"),
+                                      lambda m, r=r: states[r].setdefault(m.step, m), 100)
         world, monitor, nodes = start_swarm(ros, tmp_path, scenario)
         assert ros.spin_until(lambda: monitor.done, timeout=240.0), (
             f"monitor stopped at step {monitor.next_step} of {scenario.steps}")
@@ -61,7 +68,11 @@ def test_lockstep_team_equals_in_memory_engine(tmp_path):
             assert np.array_equal(convert.target_positions(estimates[r][k]), est), (k, r)
             found += len(est)
             g = goals[r][k].pose.position
-            assert [g.x, g.y] == engine.agents[r].controller.goal.tolist(), (k, r)
+            agent = engine.agents[r]
+            assert [g.x, g.y] == agent.controller.goal.tolist(), (k, r)
+            assert np.array_equal(np.array(maps[r][k].data), agent.estimator.search), (k, r)
+            assert states[r][k].tracking == agent.controller.tracking, (k, r)
+            assert list(states[r][k].plan_members) == list(agent.controller.plan_members)
         score = score_estimates(*engine.team_estimates(), truth, scenario.ospa_c,
                                 scenario.ospa_p)
         assert series[k]["ospa"] == score.ospa, k

@@ -1,14 +1,15 @@
 """Papaioannou et al.'s system through ``scripts/run_swarm.sh``: four agents, recorded.
 
 A 25-step run of ``config/papaioannou_small.yaml``: the log is complete for the system's
-own topics (estimates and goals; no cell or density), and the agents' messages to each
-other match what the robots report sending.
+own topics (estimates, goals, search maps, the agents' states and plans; no cell, density
+or components), the moves are those of eq. 4, and an agent's search map only fills up.
 """
 
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from phd_swarm.logs.mcap_log import read_messages
@@ -23,8 +24,13 @@ def test_a_short_run_records_every_step_and_the_agents_estimates(tmp_path, recor
     assert summary["complete"] and summary["steps"] == 25 and summary["dead_robots"] == []
     topics = summary["log_completeness"]["topics"]
     for r in range(4):
-        assert topics[T.robot_topic(r, "estimates")]["recorded"] == 25
-        assert topics[T.robot_topic(r, "goal")]["recorded"] == 25
+        for kind in ("estimates", "goal", "search_map", "sat_state", "plan"):
+            assert topics[T.robot_topic(r, kind)]["recorded"] == 25, kind
+    maps = [np.array(rec.msg.data) for rec in read_messages(
+        run / "run.mcap", topics=[T.robot_topic(0, "search_map")])]
+    assert all(((m >= 0.0) & (m <= 1.0)).all() for m in maps)
+    seen = [int(np.count_nonzero(m)) for m in maps]          # searched nodes only decay
+    assert all(a <= b for a, b in zip(seen, seen[1:], strict=False)) and seen[-1] > seen[0]
     assert not any(t.endswith(("/cell", "/density", "/components")) for t in topics)
     goals = [rec.msg for rec in read_messages(run / "run.mcap",
                                               topics=[T.robot_topic(0, "goal")])]
