@@ -14,7 +14,9 @@ topic            type                        when the system's ...
 ``tracks``       ``TrackSet``                estimator provides ``tracks`` (Sung & Tokekar
                                              Layers 2-3)
 ``markers``      ``MarkerArray``             estimator provides ``gaussian_mixture``
-                                             (ellipses, tracks, FoV, path; not a step topic)
+                                             (ellipses, tracks, FoV, path; not a step topic),
+                                             or the controller ``sat_modes`` (the sensing
+                                             square by mode, the plan, the estimates)
 ``reward_set``   ``RewardSet``               estimator provides ``reward_set`` (Shirsat &
                                              Berman M_k, with the robots met at the step)
 ``search_map``   ``DensityGrid``             estimator provides ``search_map`` (Papaioannou
@@ -47,6 +49,7 @@ from phd_swarm.nodes import convert, gm_convert
 from phd_swarm.nodes.completeness import robot_outputs
 from phd_swarm.nodes.meet_merge_wire import reward_set
 from phd_swarm.nodes.qos import publisher_qos
+from phd_swarm.nodes.sat_markers import sat_markers
 from phd_swarm.nodes.sat_share_wire import sat_state
 from phd_swarm_msgs.msg import (
     CellPolygon,
@@ -93,6 +96,10 @@ class RobotOutputs:
         self.pubs = {k: node.create_publisher(TYPES[k], k, publisher_qos("STEP"))
                      for k in self.kinds if k in TYPES}
         self.markers = None
+        self.sat_markers = publish_markers and "sat_state" in self.kinds
+        if self.sat_markers:
+            self.markers_pub = node.create_publisher(MarkerArray, "markers",
+                                                     publisher_qos("OBSERVATION"))
         if publish_markers and "components" in self.kinds:
             from phd_swarm.nodes.robot_markers import RobotMarkers
 
@@ -157,6 +164,13 @@ class RobotOutputs:
             self.pubs["plan"].publish(Path(header=h, poses=[
                 convert.pose_stamped(q, k, self.dt, self.frame_id)
                 for q in self.agent.controller.planned_path()]))
+        if self.sat_markers:
+            ctl = self.agent.controller
+            mode = ("yield" if ctl.yielding else "track") if ctl.tracking or ctl.yielding \
+                else "search"
+            self.markers_pub.publish(sat_markers(
+                convert.stamp(k, self.dt), self.frame_id, self.robot_id, self.agent.position,
+                float(est.setup.sensor.side), mode, ctl.planned_path(), points))
         if self.markers is not None:
             self.markers_pub.publish(self.markers.build(
                 convert.stamp(k, self.dt), self.agent.position, mixture, tracks,
