@@ -88,7 +88,7 @@ ROBOT_TOPICS = {
     "tracks": ("phd_swarm_msgs/msg/TrackSet", "STEP", "robot",
                "once per step (estimators with tracks)"),
     "markers": ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "robot",
-                "once per step (Gaussian-mixture estimators)"),
+                "once per step (Gaussian-mixture estimators, search-and-track agents)"),
     "reward_set": ("phd_swarm_msgs/msg/RewardSet", "STEP", "robot",
                    "once per step (estimators with reward sets)"),
     "search_map": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot",

@@ -49,3 +49,17 @@ def test_the_scan_is_reproducible_and_the_part_reads_its_options():
 def test_bad_settings_are_refused(kw):
     with pytest.raises(ValueError, match="square_range_bearing"):
         SquareRangeBearing(**kw)
+
+
+def test_polar_clutter_is_uniform_over_the_measurement_space():
+    sensor = SquareRangeBearing(clutter_rate=10.0, clutter_max_range=100.0)
+    rng = np.random.default_rng(6)
+    z = np.concatenate([simulate_scan(rng, sensor, np.zeros(2), np.empty((0, 2)))
+                        for _ in range(500)])
+    assert len(z) / 500 == pytest.approx(10.0, abs=0.3)
+    assert 0.0 <= z[:, 0].min() and z[:, 0].max() <= 100.0
+    assert z[:, 0].mean() == pytest.approx(50.0, abs=2.0)              # uniform in range
+    assert np.abs(z[:, 1]).max() <= np.pi
+    kappa = sensor.clutter_intensity(np.array([[3.0, 0.0], [150.0, 0.0]]), np.zeros(2))
+    np.testing.assert_allclose(kappa, [10.0 / (2 * np.pi * 100.0), 0.0])
+    assert SquareRangeBearing().polar_clutter_density is None

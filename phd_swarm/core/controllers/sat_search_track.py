@@ -251,6 +251,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SatControlSetup:
     tracking = RenyiTracking(alpha=float(opt["renyi_alpha"]), side=float(sensor.side),
                              p_d_inside=float(sensor.p_d),
                              clutter_rate=float(sensor.clutter_rate),
+                             clutter_density=sensor.polar_clutter_density,
                              sensor_model=sensor.model,
                              only_visible=not bool(opt["predict_all_estimates"]))
     return SatControlSetup(

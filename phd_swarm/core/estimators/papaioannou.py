@@ -48,7 +48,14 @@ from .checks import check_measurements
 from .papaioannou_figures import step_figures
 from .range_bearing import RangeBearingSensor
 from .smc_models import linear_gaussian_transition
-from .smc_phd import ParticleSet, extract_by_measurement, predict, resample, update
+from .smc_phd import (
+    ParticleSet,
+    extract,
+    extract_by_measurement,
+    predict,
+    resample,
+    update,
+)
 
 #: Stream of the estimators' own generators (particles), apart from the robots' and the
 #: world's (``SeedSequence(seed, spawn_key=(ESTIMATOR_STREAM, robot_id))``).
@@ -76,7 +83,9 @@ OPTIONS = (
     ParamSpec("estimates_from", "persistent", "papaioannou_sat: a measurement gives an "
               "estimate when the particles that existed before the scan took weight > 0.5 "
               "(persistent: a new target is reported from its second detection) or when all "
-              "particles did (all, births included)", choices=("persistent", "all")),
+              "particles did (all, births included); square: round(mass in the sensing "
+              "square) estimates by k-means there (Sec. V-A)",
+              choices=("persistent", "all", "square")),
     ParamSpec("node_size", 5.0, "papaioannou_sat: side of a search-map region r_v [m] (not "
               "stated; half the sensing square)", low=0.0),
     ParamSpec("search_decay", 0.999, "papaioannou_sat: J, the search values' decay per step "
@@ -120,6 +129,7 @@ class PapaioannouSetup:
     max_particles: int
     seed: int = 0
     confirmed_only: bool = True
+    extraction: str = "persistent"
     measurement_births: bool = True
 
 
@@ -178,7 +188,15 @@ class PapaioannouEstimator(Estimator):
         p_d = np.where(s.sensor.inside(states[:, :2], sensor), s.sensor.p_d, 0.0)
         result = update(particles, z, lambda zz, x: self._sensor.log_likelihood(
             zz, x[:, :2], sensor), p_d, s.sensor.clutter_intensity(z, sensor))
-        if s.confirmed_only:
+        if s.extraction == "square":
+            # Sec. V-A: n^ = round(mass inside the sensing square), the n^ highest peaks of
+            # the PHD there (k-means of the particles in the square, Vo et al. 2005).
+            post = result.particles
+            inside = s.sensor.inside(post.states[:, :2], sensor)
+            here = ParticleSet(post.weights[inside], post.states[inside],
+                               post.newborn[inside])
+            self._states = extract(here, np.random.default_rng(self.rng.integers(2**63)))
+        elif s.confirmed_only:
             # Ristic, Clark & Vo (2010): a measurement explained by particles that existed
             # before this scan (U(z) > 0.5) gives an estimate; births report a step later.
             self._states = result.detection_means[result.persistent_mass > 0.5].copy()
@@ -276,7 +294,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> PapaioannouSetup:
                             float(opt["birth_speed"]), bool(opt["birth_newborn"]),
                             int(opt["particles_per_target"]), int(opt["max_particles"]),
                             int(scenario.seed), opt["estimates_from"] == "persistent",
-                            opt["births"] == "measurement")
+                            opt["births"] == "measurement", str(opt["estimates_from"]))
 
 
 def _make(setup: PapaioannouSetup, robot_id: int) -> PapaioannouEstimator:

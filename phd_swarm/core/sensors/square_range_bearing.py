@@ -32,6 +32,13 @@ OPTIONS = (
               "square (eq. 5; Sec. VI-A: 0.99)", low=0.0, high=1.0),
     ParamSpec("clutter_rate", 10.0, "square_range_bearing: expected clutter points per scan, "
               "uniform over the sensing square (Sec. VI-A: 10)", low=0.0),
+    ParamSpec("clutter_space", "square", "square_range_bearing: clutter uniform over the "
+              "sensing square in the plane (square) or uniform over the measurement space "
+              "of range [0, clutter_max_range] and bearing (-pi, pi] (polar, the printed "
+              "reading)", choices=("square", "polar")),
+    ParamSpec("clutter_max_range", 141.42, "square_range_bearing: the range end of the "
+              "measurement space with clutter_space polar [m] (not stated; default the "
+              "diagonal of the 100 m area)", low=0.0),
     ParamSpec("range_sd", 1.0, "square_range_bearing: zeta0, range noise sd at zero range "
               "[m] (Sec. VI-A: 1)", low=0.0),
     ParamSpec("range_sd_slope", 5e-5, "square_range_bearing: beta_zeta, growth of the range "
@@ -63,6 +70,7 @@ class SquareRangeBearing:
     p_d: float = 0.99
     clutter_rate: float = 10.0
     model: RangeBearingSensor = field(default_factory=RangeBearingSensor)
+    clutter_max_range: float | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.side) and self.side > 0.0):
@@ -81,9 +89,20 @@ class SquareRangeBearing:
                    - np.asarray(sensor, dtype=float).reshape(2))
         return (d <= 0.5 * self.side).all(axis=1)
 
+    @property
+    def polar_clutter_density(self) -> float | None:
+        """The constant kappa [1/(m rad)] of clutter uniform in (r, phi), or None."""
+        if self.clutter_max_range is None:
+            return None
+        return self.clutter_rate / (2.0 * np.pi * self.clutter_max_range)
+
     def clutter_intensity(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
-        """kappa(z) (M,) [1/(m rad)] of plane-uniform clutter over the square."""
-        return clutter_density_square(z, sensor, self.side, self.clutter_rate)
+        """kappa(z) (M,) [1/(m rad)]: plane-uniform over the square, or uniform in (r, phi)."""
+        if self.clutter_max_range is None:
+            return clutter_density_square(z, sensor, self.side, self.clutter_rate)
+        z = np.asarray(z, dtype=float).reshape(-1, 2)
+        inside = (z[:, 0] >= 0.0) & (z[:, 0] <= self.clutter_max_range)
+        return np.where(inside, self.polar_clutter_density, 0.0)
 
 
 def simulate_scan(rng: np.random.Generator, sensor_model: SquareRangeBearing,
@@ -92,7 +111,8 @@ def simulate_scan(rng: np.random.Generator, sensor_model: SquareRangeBearing,
 
     Draws, in this order: one ``random(N)`` (detections), one ``standard_normal((D, 2))``
     (noise of the D detections), one ``poisson`` (clutter count C), one ``random((C, 2))``
-    (clutter positions, uniform in the square).
+    (clutter positions, uniform in the square, or in (range, bearing) with
+    ``clutter_max_range``).
     """
     s = np.asarray(sensor, dtype=float).reshape(-1)[:2]
     x = np.asarray(targets, dtype=float).reshape(-1, 2)
@@ -100,7 +120,12 @@ def simulate_scan(rng: np.random.Generator, sensor_model: SquareRangeBearing,
     detected = rng.random(len(x)) < p_d
     hits = sensor_model.model.simulate(rng, x[detected], s)
     n = rng.poisson(sensor_model.clutter_rate)
-    clutter = s + (rng.random((n, 2)) - 0.5) * sensor_model.side
+    u = rng.random((n, 2))
+    if sensor_model.clutter_max_range is not None:
+        clutter = np.stack([u[:, 0] * sensor_model.clutter_max_range,
+                            np.pi - 2.0 * np.pi * u[:, 1]], axis=1)
+        return np.concatenate([hits, clutter], axis=0)
+    clutter = s + (u - 0.5) * sensor_model.side
     return np.concatenate([hits, sensor_model.model.measure(clutter, s)], axis=0)
 
 
@@ -109,7 +134,8 @@ def _setup(scenario, system, **runtime) -> SquareRangeBearing:
     return SquareRangeBearing(
         float(opt["sensing_side"]), float(opt["p_d_max"]), float(opt["clutter_rate"]),
         RangeBearingSensor(float(opt["range_sd"]), float(opt["range_sd_slope"]),
-                           float(opt["bearing_sd"]), float(opt["bearing_sd_slope"])))
+                           float(opt["bearing_sd"]), float(opt["bearing_sd_slope"])),
+        float(opt["clutter_max_range"]) if opt["clutter_space"] == "polar" else None)
 
 
 registry.register(
