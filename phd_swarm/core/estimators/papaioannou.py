@@ -17,9 +17,9 @@ propagates the searching-and-tracking (SAT) density of Sec. V-A, which has two p
   are and weighted by importance (``births: measurement``, :meth:`PapaioannouEstimator.
   _births_near`): the bearing is measured to 1 degree, 7 cm across at 4 m, so births drawn
   uniformly over 100 m^2 (``births: uniform``) put almost none in the likelihood's peak;
-  estimates by measurement (Ristic, Clark & Vo 2010: a measurement whose particles that
-  existed before the scan took weight > 0.5 gives the weighted mean of the particles'
-  states; ``estimates_from: all`` counts the births' weight too);
+  estimates by measurement (Ristic, Clark & Vo 2010: a measurement whose particles took
+  weight > 0.5 gives the weighted mean of their states; ``estimates_from: persistent``
+  counts only the particles that existed before the scan);
 - the search density on virtual targets, eq. 7, 9, 10 (:mod:`phd_swarm.core.search_map`):
   one search value per node of the search map, decayed by J outside the previous square and
   set to 1 inside the current one; the exchange max-merges the values of the agents met
@@ -80,12 +80,15 @@ OPTIONS = (
               "after resampling (and per unit of birth mass)", low=1),
     ParamSpec("max_particles", 6000, "papaioannou_sat: most particles after resampling",
               low=1),
-    ParamSpec("estimates_from", "persistent", "papaioannou_sat: a measurement gives an "
-              "estimate when the particles that existed before the scan took weight > 0.5 "
-              "(persistent: a new target is reported from its second detection) or when all "
-              "particles did (all, births included); square: round(mass in the sensing "
-              "square) estimates by k-means there (Sec. V-A)",
-              choices=("persistent", "all", "square")),
+    ParamSpec("estimates_from", "all", "papaioannou_sat: a measurement gives an estimate "
+              "when the particles took weight > 0.5 (all, births included: Ristic, Clark & "
+              "Vo 2010) or when those that existed before the scan did (persistent: a new "
+              "target is reported from its second detection); square: round(mass in the "
+              "sensing square) estimates by k-means there (Sec. V-A)",
+              choices=("all", "persistent", "square")),
+    ParamSpec("roughening", 0.0, "papaioannou_sat: sd of the jitter added to every "
+              "resampled particle's position [m] and velocity [m/s] (regularisation; 0: none)",
+              low=0.0),
     ParamSpec("node_size", 5.0, "papaioannou_sat: side of a search-map region r_v [m] (not "
               "stated; half the sensing square)", low=0.0),
     ParamSpec("search_decay", 0.999, "papaioannou_sat: J, the search values' decay per step "
@@ -128,7 +131,8 @@ class PapaioannouSetup:
     per_target: int
     max_particles: int
     seed: int = 0
-    confirmed_only: bool = True
+    roughening: float = 0.0
+    confirmed_only: bool = False
     extraction: str = "persistent"
     measurement_births: bool = True
 
@@ -204,6 +208,13 @@ class PapaioannouEstimator(Estimator):
             self._states = extract_by_measurement(result)
         self.particles = resample(result.particles, self.rng, per_target=s.per_target,
                                   min_particles=s.per_target, max_particles=s.max_particles)
+        if s.roughening > 0.0 and len(self.particles):
+            # Regularisation (Musso, Oudjane & Le Gland 2001): resampled copies of one
+            # particle are jittered apart, so a cloud the 1-degree bearing squeezed to a
+            # sliver keeps particles where the next viewpoint's bearing line may cross it.
+            p = self.particles
+            jitter = self.rng.standard_normal(p.states.shape) * s.roughening
+            self.particles = ParticleSet(p.weights, p.states + jitter, p.newborn)
         previous = sensor if self._position is None else self._position
         self.search = sm.update(sm.predict(self.search, s.grid, previous, s.decay), s.grid,
                                 sensor)
@@ -293,7 +304,8 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> PapaioannouSetup:
                             sensor, grid, float(opt["search_decay"]), float(opt["birth_mass"]),
                             float(opt["birth_speed"]), bool(opt["birth_newborn"]),
                             int(opt["particles_per_target"]), int(opt["max_particles"]),
-                            int(scenario.seed), opt["estimates_from"] == "persistent",
+                            int(scenario.seed), float(opt["roughening"]),
+                            opt["estimates_from"] == "persistent",
                             opt["births"] == "measurement", str(opt["estimates_from"]))
 
 

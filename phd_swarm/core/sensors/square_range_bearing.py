@@ -6,10 +6,12 @@ target inside is detected with probability p_D^max (0.99) and measured as
 ``z = h(x, s) + v``, range [m] and bearing [rad] with range-dependent noise sds
 (:class:`~phd_swarm.core.estimators.range_bearing.RangeBearingSensor`: zeta0 = 1 m,
 beta_zeta = 5e-5, phi0 = pi/180 rad, beta_phi = 1e-5 rad/m). Clutter: a Poisson number of
-points (mean ``clutter_rate``, 10) uniform over the sensing square in the plane, each
-measured without noise; the filter's intensity for it in (r, phi) is
-:func:`~phd_swarm.core.estimators.range_bearing.clutter_density_square` (docs/decisions.md:
-"uniform over the measurement space" read as uniform over the area the sensor sees).
+points (mean ``clutter_rate``, 10) "uniformly distributed over the measurement space":
+uniform in range over [0, ``clutter_max_range``] (not stated; the 100 m area's diagonal)
+and in bearing, kappa = rate / (2 pi r_max), so few fall in the square
+(``clutter_space: square`` puts them all uniformly in the square in the plane instead,
+kappa of :func:`~phd_swarm.core.estimators.range_bearing.clutter_density_square`;
+docs/decisions.md).
 
 Measurements are (range, bearing) pairs, shape (M, 2), not positions: only estimators that
 require ``range_bearing_measurement`` can take them.
@@ -32,10 +34,10 @@ OPTIONS = (
               "square (eq. 5; Sec. VI-A: 0.99)", low=0.0, high=1.0),
     ParamSpec("clutter_rate", 10.0, "square_range_bearing: expected clutter points per scan, "
               "uniform over the sensing square (Sec. VI-A: 10)", low=0.0),
-    ParamSpec("clutter_space", "square", "square_range_bearing: clutter uniform over the "
-              "sensing square in the plane (square) or uniform over the measurement space "
-              "of range [0, clutter_max_range] and bearing (-pi, pi] (polar, the printed "
-              "reading)", choices=("square", "polar")),
+    ParamSpec("clutter_space", "polar", "square_range_bearing: clutter uniform over the "
+              "measurement space of range [0, clutter_max_range] and bearing (-pi, pi] "
+              "(polar, as printed) or over the sensing square in the plane (square)",
+              choices=("polar", "square")),
     ParamSpec("clutter_max_range", 141.42, "square_range_bearing: the range end of the "
               "measurement space with clutter_space polar [m] (not stated; default the "
               "diagonal of the 100 m area)", low=0.0),

@@ -81,3 +81,23 @@ def test_of_two_agents_tracking_the_same_targets_the_picked_one_yields():
     first = next(i for i, y in enumerate(yielded) if any(y))
     switcher = pick_switcher(agents[0][2].seed, 5 + first, 0, 1)
     assert yielded[first] == [switcher == 0, switcher == 1]
+
+
+def test_an_agent_alone_keeps_a_slow_target_in_view_with_the_default_models():
+    """One agent tracks one target at ~1 m/s for >= 45 of 50 steps.
+
+    The default models: the paper's clutter (10 per scan over the measurement space),
+    estimates from all the particles' weight.
+    """
+    est, ctl, _ = _parts()
+    rng = np.random.default_rng(0)
+    s, x = np.array([50.0, 50.0]), np.array([52.0, 51.0, 0.7, -0.7])
+    tracked = 0
+    for k in range(50):
+        est.predict()
+        est.update(Scan(0, k, s, simulate_scan(rng, est.setup.sensor, s, x[None, :2])))
+        d = ctl.decide(Knowledge(0, k, s, np.empty((0, 2)), SatView(k), est), rng)
+        e = est.estimates()
+        tracked += bool(len(e)) and np.min(np.hypot(*(e - x[:2]).T)) <= 3.0
+        s, x = d.goal, x + np.r_[x[2:], 0.0, 0.0]
+    assert tracked >= 45

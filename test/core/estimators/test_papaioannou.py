@@ -26,6 +26,7 @@ def test_the_part_reads_the_sensor_and_its_options():
     assert isinstance(est, PapaioannouEstimator)
     assert (s.p_s, s.birth_mass, s.decay, s.per_target) == (0.99, 3.0, 0.999, 300)
     assert (s.sensor.side, s.sensor.p_d, s.sensor.clutter_rate) == (10.0, 0.99, 10.0)
+    assert s.sensor.clutter_max_range == pytest.approx(141.42) and not s.confirmed_only
     assert s.grid.size == 400 and s.grid.side == 10.0              # 5 m nodes on 100 m
     f, q = ncv_model(1.0, 1.0)
     np.testing.assert_array_equal(s.f, f)
@@ -35,7 +36,8 @@ def test_the_part_reads_the_sensor_and_its_options():
 @pytest.mark.parametrize("clutter", [0.0, 10.0])
 def test_a_target_in_view_is_estimated_from_its_second_detection_on(clutter):
     """A slow target 2-3 m from the agent (q = 0.01: nearly constant velocity)."""
-    est, _ = _estimator(process_noise=0.01, clutter_rate=clutter)
+    est, _ = _estimator(process_noise=0.01, clutter_rate=clutter, clutter_space="square",
+                        estimates_from="persistent")
     rng = np.random.default_rng(4)
     x = np.array([52.0, 50.0, -0.1, 0.1])
     s = np.array([50.0, 50.0])
