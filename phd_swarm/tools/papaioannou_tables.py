@@ -23,7 +23,6 @@ Writes ``papaioannou_tables.md`` and ``.json`` and one ``<sweep>_curves.png`` pe
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -34,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from phd_swarm.tools.sung_tables import SungTablesError, over_seeds, read_results
+from phd_swarm.tools import tables_cli
+from phd_swarm.tools.sung_tables import over_seeds, read_results
 from phd_swarm.tools.sweep import load_series
 
 #: The paper's readings where it states numbers (Fig. 5a at C_R = 40 m), by sweep name.
@@ -126,20 +126,8 @@ def plot_curves(table: dict[str, Any], path: Path) -> Path:
     return path
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command-line entry point (see the module docstring); returns the exit code."""
-    p = argparse.ArgumentParser(prog="python -m phd_swarm.tools.papaioannou_tables",
-                                description=__doc__.split("\n\n")[0])
-    p.add_argument("dirs", nargs="+", type=Path, help="sweep directories")
-    p.add_argument("--out", type=Path, help="output directory (default: the first DIR)")
-    args = p.parse_args(argv)
-    try:
-        tables = [sweep_table(d) for d in args.dirs]
-    except (SungTablesError, OSError, KeyError, ValueError) as exc:
-        print(f"papaioannou_tables: {exc}", file=sys.stderr)
-        return 2
-    out = args.out or args.dirs[0]
-    out.mkdir(parents=True, exist_ok=True)
+def write(tables: list[dict[str, Any]], out: Path) -> str:
+    """``papaioannou_tables.md``, ``.json`` and one ``<sweep>_curves.png`` each into ``out``."""
     (out / "papaioannou_tables.md").write_text(markdown(tables))
     (out / "papaioannou_tables.json").write_text(json.dumps(
         [{"name": t["name"], "paper": t["paper"],
@@ -147,9 +135,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                     for c in t["cells"]]} for t in tables], indent=2) + "\n")
     for t in tables:
         plot_curves(t, out / f"{t['name']}_curves.png")
-    print(markdown(tables))
-    print(f"wrote {out}/papaioannou_tables.md, papaioannou_tables.json and the curves")
-    return 0
+    return markdown(tables)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command-line entry point (see the module docstring); returns the exit code."""
+    return tables_cli.run(argv, "papaioannou_tables", __doc__.split("\n\n")[0],
+                          sweep_table, write)
 
 
 if __name__ == "__main__":

@@ -30,7 +30,6 @@ Over the runs: mean ± sample sd (NaN runs left out and counted), and the median
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -43,7 +42,8 @@ import numpy as np
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.analysis.renewal import mean_interarrival
 from phd_swarm.core.grid_graph import GridGraph
-from phd_swarm.tools.sung_tables import SungTablesError, over_seeds, read_results
+from phd_swarm.tools import tables_cli
+from phd_swarm.tools.sung_tables import over_seeds, read_results
 from phd_swarm.tools.sweep import load_series
 
 #: The paper's numbers per sweep name: E[tau] [s], t_reward [s], reward [%].
@@ -177,27 +177,19 @@ def plot_rewards(tables: Sequence[dict[str, Any]], path: Path) -> Path:
     return path
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command-line entry point (see the module docstring); returns the exit code."""
-    p = argparse.ArgumentParser(prog="python -m phd_swarm.tools.shirsat_tables",
-                                description=__doc__.split("\n\n")[0])
-    p.add_argument("dirs", nargs="+", type=Path, help="sweep directories")
-    p.add_argument("--out", type=Path, help="output directory (default: the first DIR)")
-    args = p.parse_args(argv)
-    try:
-        tables = [sweep_table(d) for d in args.dirs]
-    except (SungTablesError, OSError, KeyError, ValueError) as exc:
-        print(f"shirsat_tables: {exc}", file=sys.stderr)
-        return 2
-    out = args.out or args.dirs[0]
-    out.mkdir(parents=True, exist_ok=True)
+def write(tables: list[dict[str, Any]], out: Path) -> str:
+    """``shirsat_tables.md``, ``.json`` and ``shirsat_reward_vs_time.png`` into ``out``."""
     (out / "shirsat_tables.md").write_text(markdown(tables))
     (out / "shirsat_tables.json").write_text(json.dumps(
         [{k: v for k, v in t.items() if k != "curves"} for t in tables], indent=2) + "\n")
     plot_rewards(tables, out / "shirsat_reward_vs_time.png")
-    print(markdown(tables))
-    print(f"wrote {out}/shirsat_tables.md, shirsat_tables.json, shirsat_reward_vs_time.png")
-    return 0
+    return markdown(tables)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command-line entry point (see the module docstring); returns the exit code."""
+    return tables_cli.run(argv, "shirsat_tables", __doc__.split("\n\n")[0], sweep_table,
+                          write)
 
 
 if __name__ == "__main__":
