@@ -21,6 +21,7 @@ from phd_swarm_msgs.msg import (
     RewardSet,
     RobotState,
     RobotStatus,
+    SatState,
     TargetSet,
     TeamMetrics,
     TeamState,
@@ -82,6 +83,9 @@ EXAMPLES = [
              covariances=[1.0, 0.25, 0.25, 2.0, 3.0, 0.0, 0.0, 3.0]),
     RewardSet(header=_header(16), source_id=4, step=16, met_ids=[1, 7],
               positions=_points(3, 1.25)),
+    SatState(header=_header(17), source_id=2, step=17, position=_points(1, 3.0)[0],
+             tracking=True, predicted=_points(2, 4.5), search=[0.0, 0.5, 1.0],
+             plan_members=[0, 2]),
 ]
 
 
