@@ -494,7 +494,9 @@ def papaioannou(agents: int = 4, targets: int = 10, spawn: str = "centre") -> Sc
 
     100 steps of 1 s (Sec. VI-B); agents start uniformly over the area and move by eq. 4
     (at most 2 x 2 m per step, so the speed limit is 4 m/s); 10 targets born at the centre
-    with random headings and a mean lifetime of 60 s (Fig. 3; ``spawn: uniform`` for Fig. 4).
+    with random headings and a mean lifetime of 60 s (Fig. 3; ``spawn: uniform`` for Fig. 4),
+    process noise q = 0.01 m^2/s^3 (the printed q = 1 is ``targets.process_noise: 1``;
+    docs/decisions.md).
     OSPA of order 2 with c = 50 m (Fig. 3). The disk detection model of ``models`` only
     sizes the world's field-of-view markers (radius 5 m, the square's half side); the
     sensor part has its own models.
@@ -505,7 +507,7 @@ def papaioannou(agents: int = 4, targets: int = 10, spawn: str = "centre") -> Sc
         dt=1.0, duration=100.0, robots=agents, robot_start_box=(0.0, 0.0, 100.0, 100.0),
         robot_max_speed=4.0,
         targets=TargetConfig(kind="ncv", count=targets, spawn=spawn, speed=1.0,
-                             lifetime_mean=60.0),
+                             lifetime_mean=60.0, process_noise=0.01),
         ospa_c=50.0, ospa_p=2.0, system=SystemConfig(**PAPAIOANNOU_SYSTEM))
 
 

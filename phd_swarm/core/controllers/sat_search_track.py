@@ -3,8 +3,9 @@
 Registered as the ``sat_search_track`` controller. At the end of step k an agent at s_k
 chooses one of the 17 admissible moves of eq. 4 (:mod:`phd_swarm.core.agent_moves`):
 
-- **Mode** (Sec. III, V-C): tracking while its filter has targets (X^_k not empty, from the
-  ``papaioannou_sat`` estimator), searching otherwise; an agent told to yield a tracking
+- **Mode** (Sec. III, V-C): tracking while its filter has targets (X^_k or a tentative
+  detection not empty, from the ``papaioannou_sat`` estimator's ``predicted_states``),
+  searching otherwise (always with ``track_targets: false``); an agent told to yield a tracking
   overlap searches while its square still overlaps the other agent's.
 - **Search** (Sec. V-B): it follows a plan over the unvisited nodes of its search map
   (p_v <= ``search_beta``): its own greedy least-cost path (the heuristic replacing P1), or,
@@ -58,6 +59,8 @@ OPTIONS = (
     ParamSpec("search_beta", 0.9, "sat_search_track: beta, a node is unvisited when its "
               "search value is <= beta (not stated; 0.9 = revisit after ~105 steps at "
               "J = 0.999)", low=0.0, high=1.0),
+    ParamSpec("track_targets", True, "sat_search_track: switch to tracking when the filter "
+              "has targets (false: search only, Fig. 4's search task)"),
     ParamSpec("search_mode", "planned", "sat_search_track: planned search (Sec. V-B) or "
               "Fig. 1's random baseline", choices=("planned", "random")),
     ParamSpec("alg1_first", "lowest", "sat_search_track: Alg. 1's first agent: the lowest "
@@ -92,6 +95,8 @@ class SatControlSetup:
     beta : float
     random_search : bool
     alg1_first : str
+    track_targets : bool
+        False: search only (Fig. 4's search task).
     overlap : bool
     overlap_threshold, overlap_cutoff : float
     overlap_window : int
@@ -110,6 +115,7 @@ class SatControlSetup:
     overlap_window: int
     overlap_cutoff: float
     seed: int
+    track_targets: bool = True
 
 
 class SatSearchTrack(Controller):
@@ -145,7 +151,7 @@ class SatSearchTrack(Controller):
         self.yielding = {j for j in self.yielding if j in messages
                          and squares_overlap(position, messages[j].position, side)}
         positions, admissible = admissible_positions(position, s.offsets, s.bounds)
-        if len(predicted) and not self.yielding:
+        if len(predicted) and not self.yielding and s.track_targets:
             action = self._track(est, predicted, positions, admissible)
             self.tracking = True
             self.stats["track_steps"] += 1
@@ -260,7 +266,8 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SatControlSetup:
         (env.xmin, env.ymin, env.xmax, env.ymax), tracking, float(opt["search_beta"]),
         opt["search_mode"] == "random", str(opt["alg1_first"]),
         bool(opt["overlap_detection"]), float(opt["overlap_threshold"]),
-        int(opt["overlap_window"]), float(opt["overlap_cutoff"]), int(scenario.seed))
+        int(opt["overlap_window"]), float(opt["overlap_cutoff"]), int(scenario.seed),
+        bool(opt["track_targets"]))
 
 
 registry.register(

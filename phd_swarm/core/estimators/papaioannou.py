@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.spatial.distance import cdist
 
 from .. import registry
 from .. import search_map as sm
@@ -64,8 +65,9 @@ ESTIMATOR_STREAM = 20
 OPTIONS = (
     ParamSpec("survival_probability", 0.99, "papaioannou_sat: p_S per step (Sec. VI-A: 0.99)",
               low=0.0, high=1.0),
-    ParamSpec("process_noise", 1.0, "papaioannou_sat: q of the NCV model's Q [m^2/s^3] "
-              "(Sec. VI-A prints Q for q = 1)", low=0.0),
+    ParamSpec("process_noise", 0.01, "papaioannou_sat: q of the NCV model's Q [m^2/s^3] "
+              "(Sec. VI-A prints Q for q = 1, which cannot keep the stated 1 m/s per axis; "
+              "docs/decisions.md)", low=0.0),
     ParamSpec("birth_mass", 3.0, "papaioannou_sat: expected births per step, uniform over the "
               "agent's sensing square (Sec. VI-A: 3)", low=0.0),
     ParamSpec("birth_speed", 2.0, "papaioannou_sat: births' velocities uniform in [-v, v]^2 "
@@ -80,12 +82,21 @@ OPTIONS = (
               "after resampling (and per unit of birth mass)", low=1),
     ParamSpec("max_particles", 6000, "papaioannou_sat: most particles after resampling",
               low=1),
-    ParamSpec("estimates_from", "all", "papaioannou_sat: a measurement gives an estimate "
-              "when the particles took weight > 0.5 (all, births included: Ristic, Clark & "
-              "Vo 2010) or when those that existed before the scan did (persistent: a new "
-              "target is reported from its second detection); square: round(mass in the "
-              "sensing square) estimates by k-means there (Sec. V-A)",
+    ParamSpec("estimates_from", "persistent", "papaioannou_sat: a measurement gives an "
+              "estimate when the particles that existed before the scan took weight > 0.5 "
+              "(persistent: a new target is reported from its second detection), or when all "
+              "did, births included (all: Ristic, Clark & Vo 2010, a clutter point in view is "
+              "an estimate at once); square: round(mass in the sensing square) estimates by "
+              "k-means there (Sec. V-A)",
               choices=("all", "persistent", "square")),
+    ParamSpec("look_tentative", True, "papaioannou_sat: a measurement whose particles, births "
+              "included, took weight > 0.5 but that is not an estimate yet is handed to the "
+              "controller with the predicted estimates, so the agent tracks it and looks again "
+              "(false: the controller sees the estimates only)"),
+    ParamSpec("hold_gate", 5.0, "papaioannou_sat: an estimate no measurement renews is "
+              "kept, moved to the particles within this distance [m] of its prediction, while "
+              "their weight exceeds 0.5 (0: estimates only from this step's measurements)",
+              low=0.0),
     ParamSpec("roughening", 0.0, "papaioannou_sat: sd of the jitter added to every "
               "resampled particle's position [m] and velocity [m/s] (regularisation; 0: none)",
               low=0.0),
@@ -135,6 +146,8 @@ class PapaioannouSetup:
     confirmed_only: bool = False
     extraction: str = "persistent"
     measurement_births: bool = True
+    hold_gate: float = 0.0
+    look_tentative: bool = False
 
 
 def ncv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
@@ -171,6 +184,8 @@ class PapaioannouEstimator(Estimator):
         self.search = sm.initial_values(setup.grid)
         self._position: np.ndarray | None = None
         self._states = np.empty((0, 4))
+        #: Detections the births made likely (weight > 0.5) that are not estimates yet.
+        self._tentative = np.empty((0, 4))
         self.step = -1
 
     # ------------------------------------------------------------------ filter
@@ -184,6 +199,7 @@ class PapaioannouEstimator(Estimator):
         s = self.setup
         sensor = scan.sensor
         z = check_measurements(scan.z, 2)
+        previous = self._states
         born = (self._births_near(z, sensor) if s.measurement_births
                 else self._births(sensor))
         particles = ParticleSet.concatenate([self.particles, born]) if len(born) else \
@@ -206,6 +222,17 @@ class PapaioannouEstimator(Estimator):
             self._states = result.detection_means[result.persistent_mass > 0.5].copy()
         else:
             self._states = extract_by_measurement(result)
+        if s.hold_gate > 0.0 and s.extraction != "square":
+            self._states = np.concatenate([self._states,
+                                           self._held(previous, result.particles,
+                                                      self._states)])
+        self._tentative = np.empty((0, 4))
+        if s.look_tentative and s.extraction != "square":
+            seen = extract_by_measurement(result)
+            if len(seen) and len(self._states):
+                gate = max(s.hold_gate, 1e-9)
+                seen = seen[~(cdist(seen[:, :2], self._states[:, :2]) <= gate).any(axis=1)]
+            self._tentative = seen
         self.particles = resample(result.particles, self.rng, per_target=s.per_target,
                                   min_particles=s.per_target, max_particles=s.max_particles)
         if s.roughening > 0.0 and len(self.particles):
@@ -220,6 +247,29 @@ class PapaioannouEstimator(Estimator):
                                 sensor)
         self._position = np.array(sensor, dtype=float)
         self.step = int(scan.step)
+
+    def _held(self, previous: np.ndarray, post: ParticleSet,
+              renewed: np.ndarray) -> np.ndarray:
+        """The previous estimates no measurement renewed, moved to the posterior's mass.
+
+        Each previous estimate x^_{k-1} is predicted to F x^_{k-1}; unless a renewed estimate
+        lies within ``hold_gate`` of it, the posterior particles within ``hold_gate`` of the
+        prediction (positions) give it again, at their weighted mean, if their weight is
+        > 0.5. A target out of the square keeps its estimate while its mass lasts (p_D = 0
+        there, so the PHD keeps it at p_S per step); one missed in view loses it
+        (1 - p_D = 0.01 of its weight stays).
+        """
+        gate = self.setup.hold_gate
+        previous = previous @ self.setup.f.T
+        if len(previous) == 0 or len(post) == 0:
+            return np.empty((0, 4))
+        if len(renewed):
+            near = (cdist(previous[:, :2], renewed[:, :2]) <= gate).any(axis=1)
+            previous = previous[~near]
+        w = (cdist(previous[:, :2], post.states[:, :2]) <= gate) * post.weights   # (K, N)
+        mass = w.sum(axis=1)
+        keep = mass > 0.5
+        return (w[keep] @ post.states) / mass[keep, None]
 
     def _births_near(self, z: np.ndarray, sensor: np.ndarray) -> ParticleSet:
         """The uniform birth intensity of :meth:`_births`, sampled where the measurements are.
@@ -275,9 +325,17 @@ class PapaioannouEstimator(Estimator):
         """X^_k positions (K, 2) [m]."""
         return self._states[:, :2].copy()
 
+    def tentative_states(self) -> np.ndarray:
+        """Detections not yet estimates whose particles took weight > 0.5 (T, 4)."""
+        return self._tentative.copy()
+
     def predicted_states(self) -> np.ndarray:
-        """X^_{k+1|k}: the estimates moved by F without noise (K, 4) (the mean prediction)."""
-        return self._states @ self.setup.f.T
+        """X^_{k+1|k}, the mean prediction the controller tracks (K + T, 4).
+
+        The estimates and, with ``look_tentative``, the tentative detections, moved by F
+        without noise.
+        """
+        return np.concatenate([self._states, self._tentative]) @ self.setup.f.T
 
     def expected_count(self) -> float:
         """The particles' total weight (the PHD's mass)."""
@@ -305,8 +363,11 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> PapaioannouSetup:
                             float(opt["birth_speed"]), bool(opt["birth_newborn"]),
                             int(opt["particles_per_target"]), int(opt["max_particles"]),
                             int(scenario.seed), float(opt["roughening"]),
-                            opt["estimates_from"] == "persistent",
-                            opt["births"] == "measurement", str(opt["estimates_from"]))
+                            confirmed_only=opt["estimates_from"] == "persistent",
+                            extraction=str(opt["estimates_from"]),
+                            measurement_births=opt["births"] == "measurement",
+                            hold_gate=float(opt["hold_gate"]),
+                            look_tentative=bool(opt["look_tentative"]))
 
 
 def _make(setup: PapaioannouSetup, robot_id: int) -> PapaioannouEstimator:

@@ -101,3 +101,16 @@ def test_an_agent_alone_keeps_a_slow_target_in_view_with_the_default_models():
         tracked += bool(len(e)) and np.min(np.hypot(*(e - x[:2]).T)) <= 3.0
         s, x = d.goal, x + np.r_[x[2:], 0.0, 0.0]
     assert tracked >= 45
+
+
+def test_a_search_only_agent_keeps_searching_with_targets_in_view():
+    rng = np.random.default_rng(4)
+    s, target = np.array([50.0, 50.0]), np.array([[53.0, 50.0]])
+    for track, expected in ((True, True), (False, False)):
+        est, ctl, _ = _parts(track_targets=track)
+        for k in range(4):
+            est.predict()
+            est.update(Scan(0, k, s, simulate_scan(rng, est.setup.sensor, s, target)))
+        assert len(est.estimates())
+        ctl.decide(Knowledge(0, 3, s, np.empty((0, 2)), SatView(3), est), rng)
+        assert ctl.tracking is expected

@@ -26,11 +26,20 @@ def test_the_part_reads_the_sensor_and_its_options():
     assert isinstance(est, PapaioannouEstimator)
     assert (s.p_s, s.birth_mass, s.decay, s.per_target) == (0.99, 3.0, 0.999, 300)
     assert (s.sensor.side, s.sensor.p_d, s.sensor.clutter_rate) == (10.0, 0.99, 10.0)
-    assert s.sensor.clutter_max_range == pytest.approx(141.42) and not s.confirmed_only
+    assert s.sensor.clutter_max_range == pytest.approx(141.42)
     assert s.grid.size == 400 and s.grid.side == 10.0              # 5 m nodes on 100 m
-    f, q = ncv_model(1.0, 1.0)
+    assert (s.confirmed_only, s.extraction, s.measurement_births) == (True, "persistent", True)
+    assert (s.hold_gate, s.look_tentative) == (5.0, True)
+    f, q = ncv_model(1.0, 0.01)
     np.testing.assert_array_equal(s.f, f)
-    np.testing.assert_allclose(q[[0, 0, 2], [0, 2, 2]], [1 / 3, 1 / 2, 1.0])
+    np.testing.assert_array_equal(s.q, q)
+    np.testing.assert_allclose(ncv_model(1.0, 1.0)[1][[0, 0, 2], [0, 2, 2]],
+                               [1 / 3, 1 / 2, 1.0])
+    # Every option reaches its own field (the setup once passed two of them swapped).
+    t = _estimator(estimates_from="square", births="uniform", hold_gate=0.0,
+                   look_tentative=False)[0].setup
+    assert (t.confirmed_only, t.extraction, t.measurement_births) == (False, "square", False)
+    assert (t.hold_gate, t.look_tentative) == (0.0, False)
 
 
 @pytest.mark.parametrize("clutter", [0.0, 10.0])
@@ -81,3 +90,48 @@ def test_each_agent_draws_from_its_own_stream():
     b, _ = _estimator(1)
     c, _ = _estimator(0)
     assert a.rng.random() == c.rng.random() != b.rng.random()
+
+
+def _exact_scan(sensor_model, s, targets):
+    """Noise-free measurements of ``targets`` from ``s``, no clutter (M, 2)."""
+    d = np.asarray(targets, dtype=float).reshape(-1, 2) - s
+    return np.column_stack([np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0])])
+
+
+def test_a_first_detection_is_tentative_not_an_estimate():
+    est, _ = _estimator(clutter_rate=0.0)
+    s, target = np.array([50.0, 50.0]), np.array([[53.0, 51.0]])
+    est.predict()
+    est.update(Scan(0, 0, s, _exact_scan(est.setup.sensor.model, s, target)))
+    assert len(est.estimates()) == 0
+    tentative = est.tentative_states()
+    assert len(tentative) == 1 and np.hypot(*(tentative[0, :2] - target[0])) < 0.5
+    np.testing.assert_array_equal(est.predicted_states(), tentative @ est.setup.f.T)
+    est.predict()
+    est.update(Scan(0, 1, s, _exact_scan(est.setup.sensor.model, s, target)))
+    assert len(est.estimates()) == 1 and len(est.tentative_states()) == 0
+    off, _ = _estimator(clutter_rate=0.0, look_tentative=False)
+    off.predict()
+    off.update(Scan(0, 0, s, _exact_scan(off.setup.sensor.model, s, target)))
+    assert len(off.predicted_states()) == 0
+
+
+@pytest.mark.parametrize("gate", [0.0, 5.0])
+def test_an_estimate_is_held_out_of_view_and_dropped_when_missed_in_view(gate):
+    est, _ = _estimator(clutter_rate=0.0, hold_gate=gate)
+    s, target = np.array([50.0, 50.0]), np.array([[52.0, 50.0]])
+    for k in range(4):
+        est.predict()
+        est.update(Scan(0, k, s, _exact_scan(est.setup.sensor.model, s, target)))
+    assert len(est.estimates()) == 1
+    away = np.array([70.0, 50.0])                                # the target out of view
+    est.predict()
+    est.update(Scan(0, 4, away, np.empty((0, 2))))
+    if gate == 0.0:
+        assert len(est.estimates()) == 0                           # only measurements give one
+        return
+    held = est.estimates()
+    assert len(held) == 1 and np.hypot(*(held[0] - target[0])) < 1.0
+    est.predict()
+    est.update(Scan(0, 5, s, np.empty((0, 2))))                    # missed in view: 1 % stays
+    assert len(est.estimates()) == 0
