@@ -62,13 +62,20 @@ likelihood); a second Stone Soup row runs it with the exact likelihood
 (``estimators_stonesoup._ExactSMCPHDUpdater``), the filter ours implements. Ours
 (:func:`run_ours_smc`) has the same budget, births, models and extraction.
 
-Range-bearing on B (``--only rb`` or the default run; no Stone Soup counterpart): the truth
-of B measured by Papaioannou's range-bearing sensor (Sec. VI-A noise: sd 1 m + 5e-5 r in
-range, 1 degree + 1e-5 r rad in bearing) from the centre of the square, p_D 0.95, clutter
-Poisson(10) uniform over the square, measured without noise in (r, phi) (its intensity
-there is ``lambda r / A``, :func:`.range_bearing.clutter_density_square`). Ours: the
-GM-PHD with the EKF and the UKF update, and the SMC-PHD with the range-bearing likelihood;
-models, births and reduction as on B.
+Range-bearing on B (``--only rb`` or the default run): the truth of B measured by
+Papaioannou's range-bearing sensor (Sec. VI-A noise: sd 1 m + 5e-5 r in range, 1 degree +
+1e-5 r rad in bearing) from the centre of the square, p_D 0.95, clutter Poisson(10) uniform
+over the square, measured without noise in (r, phi) (its intensity there is
+``lambda r / A``, :func:`.range_bearing.clutter_density_square`). Ours: the GM-PHD with the
+EKF and the UKF update, and the SMC-PHD with the range-bearing likelihood; models, births
+and reduction as on B. Stone Soup's counterpart of the SMC-PHD (two rows, its updater's
+noisy likelihood and the exact one, as on "smc"; same budget, births and extraction):
+``CartesianToBearingRange`` (bearing, range order; our rows are converted, the bearing
+difference wrapped) cannot take a range-dependent noise, so
+``estimators_stonesoup.RangeDependentBearingRange`` evaluates the likelihood with the sds
+at each particle's range, and ``_PolarClutterSMCPHDUpdater`` gives each detection its
+clutter intensity ``lambda r / A`` (Stone Soup's updater takes one scalar). The GM-PHD
+rows have no Stone Soup counterpart here (their speed-up is left blank).
 """
 
 from __future__ import annotations
@@ -464,12 +471,18 @@ TARGETS = {
 
 
 def compare(rows: list[dict[str, object]]) -> None:
-    """Add the speed ratio (Stone Soup median / ours) and the target check to our rows."""
+    """Add the speed ratio (Stone Soup median / ours) and the target check to our rows.
+
+    The reference of a row is the first Stone Soup row of the same scenario and filter
+    family (GM-PHD or SMC-PHD; the first word of the variant).
+    """
     for row in rows:
         if row["implementation"] != OURS:
             continue
+        family = str(row["variant"]).split()[0]    # GM-PHD or SMC-PHD
         ref = next((r for r in rows if r["scenario"] == row["scenario"]
-                    and r["implementation"] != OURS), None)
+                    and r["implementation"] != OURS
+                    and str(r["variant"]).split()[0] == family), None)
         row["speedup_vs_stonesoup"] = (None if ref is None
                                        else ref["median_ms"] / row["median_ms"])
         target = TARGETS.get((row["scenario"], row["variant"]))
@@ -597,6 +610,18 @@ def main(argv: list[str] | None = None) -> int:
                                   run_ours_range_bearing(rb_data, b_spec, method, particles,
                                                          args.seed),
                                   rb_data, b_spec.ospa_c, b_spec.ospa_p, size_kind))
+        if ss is not None:
+            from phd_swarm.core.estimators.range_bearing import RangeBearingSensor
+
+            sensor_model = RangeBearingSensor()
+            noise_sd = (sensor_model.zeta0, sensor_model.beta_zeta, sensor_model.phi0,
+                        sensor_model.beta_phi)
+            for exact, label in ((False, "SMC-PHD"), (True, "SMC-PHD exact likelihood")):
+                rows.append(summarise("B-rb", STONESOUP, label,
+                                      Run(**ss.run_smc_range_bearing(
+                                          rb_data, b_spec, particles, args.seed, noise_sd,
+                                          exact_likelihood=exact)),
+                                      rb_data, b_spec.ospa_c, b_spec.ospa_p, "particles"))
 
     compare(rows)
     extra: dict[str, object] = {"seed": args.seed, "quick": args.quick,

@@ -20,6 +20,11 @@ The pieces are those of Stone Soup's GM-PHD tutorial, with the benchmark's model
 - SMC-PHD: ``SMCPHDPredictor`` (expansion births from a ``ParticleSampler``) and
   ``SMCPHDUpdater`` with a ``SystematicResampler`` back to the particle budget, driven by a
   ``SimpleHypothesiser`` as in ``SMCPHDInitiator``.
+- SMC-PHD on range-bearing B: the same, measured by :class:`RangeDependentBearingRange`, a
+  ``CartesianToBearingRange`` whose likelihood uses the noise sds at each particle's range
+  (Stone Soup 1.9.1's model has one fixed noise covariance), with the clutter intensity
+  ``lambda r / A`` per detection (:class:`_PolarClutterSMCPHDUpdater`; its ``SMCPHDUpdater``
+  takes one scalar).
 
 Where Stone Soup 1.9.1 differs from Vo & Ma (and from ours), by design of its classes:
 ``PHDUpdater`` drops the missed-detection terms of birth components; the reducer caps a
@@ -49,6 +54,7 @@ from stonesoup.hypothesiser.simple import SimpleHypothesiser
 from stonesoup.measures import Mahalanobis
 from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
 from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.models.transition.linear import (
     CombinedLinearGaussianTransitionModel,
     ConstantVelocity,
@@ -58,6 +64,7 @@ from stonesoup.predictor.kalman import KalmanPredictor
 from stonesoup.predictor.particle import SMCPHDPredictor
 from stonesoup.resampler.particle import SystematicResampler
 from stonesoup.sampler.particle import ParticleSampler
+from stonesoup.types.angle import Bearing
 from stonesoup.types.array import StateVector, StateVectors
 from stonesoup.types.detection import Detection
 from stonesoup.types.state import ParticleState, TaggedWeightedGaussianState
@@ -249,17 +256,12 @@ class _ExactSMCPHDUpdater(_SMCPHDUpdater):
         return g
 
 
-def run_smc_tracking(data, spec, particles: int, seed: int,
-                     birth_fraction: float = 0.1, exact_likelihood: bool = False) -> dict:
-    """Stone Soup's SMC-PHD on scenario B with a budget of ``particles`` particles.
+def _run_smc(data, spec, particles: int, seed: int, measurement_model, updater,
+             detection_vector, birth_fraction: float) -> dict:
+    """Stone Soup's SMC-PHD over ``data`` with ``updater`` (an :class:`_SMCPHDUpdater`).
 
-    ``exact_likelihood``: the updater evaluates g(z | x) without the random noise Stone
-    Soup 1.9.1 adds to it (:class:`_ExactSMCPHDUpdater`).
-
-    Expansion births: ``birth_fraction * particles`` uniform particles per step carrying
-    ``spec.birth_rate`` in all; resampled back to ``particles`` after each update.
-    Extraction: for each measurement, the weight it claims; above 0.5, the weighted mean
-    position of the particles (round(weight) copies).
+    Births, initial particles, CV transition and extraction of :func:`run_smc_tracking`;
+    ``detection_vector(z)``: the Stone Soup measurement vector of our measurement row z.
     """
     rng = np.random.default_rng(seed + 7919)
     np.random.seed(seed)  # Stone Soup's transition noise and resampler draw from np.random
@@ -271,17 +273,12 @@ def run_smc_tracking(data, spec, particles: int, seed: int,
 
     transition = CombinedLinearGaussianTransitionModel(
         [ConstantVelocity(spec.q), ConstantVelocity(spec.q)])
-    mm = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=spec.r_sd ** 2 * np.eye(2))
     predictor = SMCPHDPredictor(
         transition_model=transition, death_probability=-math.log(spec.p_s),
         birth_probability=birth_fraction, birth_rate=spec.birth_rate,
         birth_sampler=ParticleSampler(distribution_func=sample, params={"num_samples": 1},
                                       ndim_state=4),
         birth_scheme="expansion")
-    updater_class = _ExactSMCPHDUpdater if exact_likelihood else _SMCPHDUpdater
-    updater = updater_class(measurement_model=mm, prob_detect=spec.p_d,
-                             clutter_intensity=spec.clutter_intensity, num_samples=particles,
-                             resampler=SystematicResampler())
     hypothesiser = SimpleHypothesiser(predictor=predictor)
     state = ParticleState(StateVectors(sample(particles)),
                           log_weight=np.full(particles, math.log(spec.n_initial / particles)),
@@ -289,8 +286,8 @@ def run_smc_tracking(data, spec, particles: int, seed: int,
     ms, sizes, estimates = [], [], []
     for k in range(data.steps):
         now = T0 + timedelta(seconds=k * spec.dt)
-        detections = {Detection(StateVector(z), timestamp=now, measurement_model=mm)
-                      for z in data.z[k]}
+        detections = {Detection(detection_vector(z), timestamp=now,
+                                measurement_model=measurement_model) for z in data.z[k]}
         t0 = time.perf_counter()
         hypotheses = hypothesiser.hypothesise(state, detections, timestamp=now)
         hypotheses.single_hypotheses.sort(key=bool)  # missed detection first
@@ -308,3 +305,139 @@ def run_smc_tracking(data, spec, particles: int, seed: int,
         sizes.append(len(state))
         estimates.append(x)
     return {"ms": ms, "sizes": sizes, "estimates": estimates}
+
+
+def run_smc_tracking(data, spec, particles: int, seed: int,
+                     birth_fraction: float = 0.1, exact_likelihood: bool = False) -> dict:
+    """Stone Soup's SMC-PHD on scenario B with a budget of ``particles`` particles.
+
+    ``exact_likelihood``: the updater evaluates g(z | x) without the random noise Stone
+    Soup 1.9.1 adds to it (:class:`_ExactSMCPHDUpdater`).
+
+    Expansion births: ``birth_fraction * particles`` uniform particles per step carrying
+    ``spec.birth_rate`` in all; resampled back to ``particles`` after each update.
+    Extraction: for each measurement, the weight it claims; above 0.5, the weighted mean
+    position of the particles (round(weight) copies).
+    """
+    mm = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=spec.r_sd ** 2 * np.eye(2))
+    updater_class = _ExactSMCPHDUpdater if exact_likelihood else _SMCPHDUpdater
+    updater = updater_class(measurement_model=mm, prob_detect=spec.p_d,
+                            clutter_intensity=spec.clutter_intensity, num_samples=particles,
+                            resampler=SystematicResampler())
+    return _run_smc(data, spec, particles, seed, mm, updater, StateVector, birth_fraction)
+
+
+class RangeDependentBearingRange(CartesianToBearingRange):
+    """``CartesianToBearingRange`` whose noise sds grow with each particle's range.
+
+    Our scenario's sensor (Papaioannou Sec. VI-A, ``phd_swarm.core.estimators.range_bearing``)
+    has g(z | x) = N(z; h(x), diag(sigma_phi(r)^2, sigma_r(r)^2)) with
+    ``sigma_r = zeta0 + beta_zeta r``, ``sigma_phi = phi0 + beta_phi r`` at the target's
+    range r = ||p - s||. Stone Soup 1.9.1's ``CartesianToBearingRange`` has a single noise
+    covariance (``noise_covar``; ``covar()`` takes no state), so it cannot express that. This
+    subclass keeps its measurement function h (Stone Soup's order: bearing, range; bearing
+    of the target from ``translation_offset``) and replaces the noise:
+
+    - ``logpdf(detection, state)``: per particle, the diagonal Gaussian with the sds at that
+      particle's noise-free range, of (z - h(x)) with the bearing difference wrapped to
+      [-pi, pi) (``Bearing.mod_angle``, as the parent does);
+    - ``function(state, noise=True)`` (used by ``logpdf(..., noise=True)``, which is what
+      Stone Soup's ``SMCPHDUpdater`` calls): adds a noise draw per particle with the sds at
+      that particle's range (from ``np.random``, as the parent's ``rvs``).
+
+    ``noise_covar`` (what ``covar()`` and ``rvs()`` still return / draw from) is the
+    covariance at zero range; the particle filter does not use it.
+    """
+
+    zeta0: float = Property(default=1.0, doc="range sd at zero range [m]")
+    beta_zeta: float = Property(default=5e-5, doc="growth of the range sd [m/m]")
+    phi0: float = Property(default=math.pi / 180.0, doc="bearing sd at zero range [rad]")
+    beta_phi: float = Property(default=1e-5, doc="growth of the bearing sd [rad/m]")
+
+    def _sd(self, rho) -> np.ndarray:
+        """Noise sds (2, N): bearing, range, at the ranges ``rho`` (N,)."""
+        rho = np.asarray(rho, dtype=float)
+        return np.vstack([self.phi0 + self.beta_phi * rho, self.zeta0 + self.beta_zeta * rho])
+
+    def _function(self, state, noise=False, **kwargs):
+        clean = super()._function(state, noise=False, **kwargs)       # (2, N) [phi; rho]
+        if noise is True:
+            noise = self._sd(clean[1]) * np.random.standard_normal(clean.shape)
+        elif noise is False or noise is None:
+            return clean
+        return clean + noise
+
+    def logpdf(self, state1, state2, noise=False, **kwargs):
+        """Log-likelihood of ``state1`` given each particle of ``state2`` (sds at its range)."""
+        clean = super()._function(state2, noise=False, **kwargs)
+        sd = self._sd(clean[1])
+        pred = clean if noise is False or noise is None else (
+            clean + (sd * np.random.standard_normal(clean.shape) if noise is True else noise))
+        v = np.asarray(state1.state_vector.astype(np.float64)) - np.asarray(pred, dtype=float)
+        v[0] = Bearing.mod_angle(v[0])
+        likelihood = np.atleast_1d(-0.5 * np.sum((v / sd) ** 2, axis=0)
+                                   - np.log(2.0 * np.pi * sd[0] * sd[1]))
+        return likelihood[0] if len(likelihood) == 1 else likelihood
+
+
+class _PolarClutterSMCPHDUpdater(_SMCPHDUpdater):
+    """``SMCPHDUpdater`` with the clutter intensity evaluated at each detection.
+
+    Clutter uniform over the square of side ``side`` centred on the sensor, measured
+    without noise in (bearing, range): intensity ``clutter_rate * r / side^2`` inside the
+    square (r >= 0), else 0 [1/(m rad)]. Stone Soup 1.9.1's updater takes one scalar
+    ``clutter_intensity``; its update uses ``log(clutter_intensity)`` broadcast against the
+    per-detection sums, so this sets it to the (M,) array of the detections, in the order
+    the update takes them, before each update.
+    """
+
+    clutter_rate: float = Property(default=10.0, doc="expected clutter points per scan")
+    side: float = Property(default=200.0, doc="side of the clutter square [m]")
+
+    def get_log_weights_per_hypothesis(self, hypotheses):
+        z = np.array([np.asarray(h.measurement.state_vector, dtype=float).ravel()
+                      for h in hypotheses if h]).reshape(-1, 2)   # (M, 2): bearing, range
+        phi, r = z[:, 0], z[:, 1]
+        half = 0.5 * self.side
+        inside = ((r >= 0.0) & (np.abs(r * np.cos(phi)) <= half)
+                  & (np.abs(r * np.sin(phi)) <= half))
+        self.clutter_intensity = np.where(inside, self.clutter_rate * r / self.side ** 2, 0.0)
+        with np.errstate(divide="ignore"):   # log(0) = -inf outside the square: no clutter
+            return super().get_log_weights_per_hypothesis(hypotheses)
+
+
+class _ExactPolarClutterSMCPHDUpdater(_PolarClutterSMCPHDUpdater, _ExactSMCPHDUpdater):
+    """The polar-clutter updater with the exact likelihood of :class:`_ExactSMCPHDUpdater`."""
+
+
+def run_smc_range_bearing(data, spec, particles: int, seed: int, noise_sd: tuple,
+                          birth_fraction: float = 0.1, exact_likelihood: bool = False) -> dict:
+    """Stone Soup's SMC-PHD on range-bearing B (``data``: estimators.make_range_bearing).
+
+    As :func:`run_smc_tracking` (budget, births, initial particles, CV model, p_S, p_D,
+    extraction), with :class:`RangeDependentBearingRange` (``noise_sd``: zeta0, beta_zeta,
+    phi0, beta_phi) from the sensor position (fixed; the square's centre) and the clutter
+    intensity ``lambda r / A`` of :class:`_PolarClutterSMCPHDUpdater`. Our measurement rows
+    (range, bearing) become Stone Soup's (bearing, range) vectors, the bearing a
+    ``Bearing`` (wrapped to [-pi, pi)). ``exact_likelihood``: as in
+    :func:`run_smc_tracking`.
+    """
+    sensor = np.asarray(data.sensor[0], dtype=float)
+    if not np.allclose(data.sensor, sensor):
+        raise ValueError("run_smc_range_bearing needs a fixed sensor")
+    zeta0, beta_zeta, phi0, beta_phi = (float(v) for v in noise_sd)
+    mm = RangeDependentBearingRange(
+        ndim_state=4, mapping=(0, 2), noise_covar=np.diag([phi0 ** 2, zeta0 ** 2]),
+        translation_offset=StateVector(sensor), zeta0=zeta0, beta_zeta=beta_zeta, phi0=phi0,
+        beta_phi=beta_phi)
+    updater_class = (_ExactPolarClutterSMCPHDUpdater if exact_likelihood
+                     else _PolarClutterSMCPHDUpdater)
+    updater = updater_class(measurement_model=mm, prob_detect=spec.p_d,
+                            clutter_intensity=spec.clutter_intensity, num_samples=particles,
+                            resampler=SystematicResampler(), clutter_rate=spec.clutter_rate,
+                            side=spec.side)
+
+    def detection_vector(z) -> StateVector:
+        return StateVector([Bearing(float(z[1])), float(z[0])])
+
+    return _run_smc(data, spec, particles, seed, mm, updater, detection_vector, birth_fraction)

@@ -145,3 +145,21 @@ def test_bench_shirsat_quick_times_the_robot_step_and_the_ros_run(tmp_path, chil
     # One message per robot met, none otherwise: a robot at a meeting meets 1 or 2 others.
     meeting = ros["robots_meeting_per_step"] / 3
     assert meeting - 1e-12 <= ros["messages_per_robot_per_step"] <= 2 * meeting + 1e-12
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_papaioannou_quick_times_a_trial_the_reward_and_the_ros_run(tmp_path, children):
+    proc = children.start([str(ROOT / "scripts" / "bench.sh"), "papaioannou", "--quick",
+                           "--out", str(tmp_path)])
+    _, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    trial, *rest = json.loads(next(tmp_path.glob("papaioannou-*.json")).read_text())["results"]
+    rewards, ros = rest[:-1], rest[-1]
+    assert trial["steps"] == 100 and trial["trial_cpu_s_median"] > 0
+    assert [(r["particles"], r["moves"]) for r in rewards] == [(300, 17), (1200, 17),
+                                                                (6000, 17)]
+    assert all(r["median_ms"] > 0 for r in rewards)
+    assert ros["steps"] == 100 and ros["complete"] and ros["real_time_factor"] > 0
+    assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", *(f"robot_{i}"
+                                                                   for i in range(4))}
