@@ -147,19 +147,16 @@ def test_bench_shirsat_quick_times_the_robot_step_and_the_ros_run(tmp_path, chil
     assert meeting - 1e-12 <= ros["messages_per_robot_per_step"] <= 2 * meeting + 1e-12
 
 
-@pytest.mark.ros
 @pytest.mark.slow
-def test_bench_papaioannou_quick_times_a_trial_the_reward_and_the_ros_run(tmp_path, children):
-    proc = children.start([str(ROOT / "scripts" / "bench.sh"), "papaioannou", "--quick",
-                           "--out", str(tmp_path)])
-    _, stderr = proc.communicate(timeout=300)
-    assert proc.returncode == 0, stderr
-    trial, *rest = json.loads(next(tmp_path.glob("papaioannou-*.json")).read_text())["results"]
-    rewards, ros = rest[:-1], rest[-1]
+def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
+    """The ROS run of the benchmark is test_run_swarm_papaioannou's; --no-ros skips it here."""
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "papaioannou", "--quick",
+                             "--no-ros", "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    trial, *rewards = json.loads(next(tmp_path.glob("papaioannou-*.json")).read_text())[
+        "results"]
     assert trial["steps"] == 100 and trial["trial_cpu_s_median"] > 0
     assert [(r["particles"], r["moves"]) for r in rewards] == [(300, 17), (1200, 17),
                                                                 (6000, 17)]
     assert all(r["median_ms"] > 0 for r in rewards)
-    assert ros["steps"] == 100 and ros["complete"] and ros["real_time_factor"] > 0
-    assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", *(f"robot_{i}"
-                                                                   for i in range(4))}
