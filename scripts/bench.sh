@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Benchmarks: `scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou [--quick]`. Sets up if needed; prints the
+# Benchmarks: `scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery [--quick]`. Sets up if needed; prints the
 # figures and writes them as JSON under bench/results/. `estimators` runs in the benchmark-only .venv-bench with
 # Stone Soup (scripts/bench_stonesoup_setup.sh), or from .venv without it given --no-stonesoup.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou [--quick] [options]" >&2; exit 2; }
+usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery [--quick] [options]" >&2; exit 2; }
 [ $# -ge 1 ] || usage
 what="$1"; shift
 "$ROOT/scripts/setup.sh" >/dev/null
@@ -20,6 +20,7 @@ case "$what" in
   recorder) exec python "$ROOT/bench/recorder.py" "$@" ;;
   sung) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/sung.py" "$@" ;;
   shirsat) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/shirsat.py" "$@" ;;
+  discovery) exec python "$ROOT/bench/discovery.py" "$@" ;;
   papaioannou) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/papaioannou.py" "$@" ;;
   estimators) if [[ " $* " == *" --no-stonesoup "* ]]; then py=python; else py="$("$ROOT/scripts/bench_stonesoup_setup.sh")"; fi; exec "$py" "$ROOT/bench/estimators.py" "$@" ;;
   *) usage ;;

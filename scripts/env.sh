@@ -5,7 +5,8 @@
 #   ament/CMake prefix paths at it; native install: uses the ROS already sourced
 #   (/opt/ros/jazzy/setup.bash) when there is no .venv.
 # - Sources the colcon install space if it has been built.
-# - Keeps DDS on loopback: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and a ROS_DOMAIN_ID of its
+# - Keeps DDS on loopback: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (or, with PHD_SWARM_DDS=profile,
+#   the repository's Fast DDS profile bound to 127.0.0.1), and a ROS_DOMAIN_ID of its
 #   own. Both can be overridden by the caller (export them before sourcing).
 
 PHD_SWARM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -47,6 +48,14 @@ if [ -f "$PHD_SWARM_ROOT/install/local_setup.bash" ]; then
   unset _phd_nounset
 fi
 
+# PHD_SWARM_DDS=profile: the repository's Fast DDS profile instead of LOCALHOST (UDP bound to
+# 127.0.0.1, 160 participant ports probed; what run_swarm.sh uses above 30 processes, so a
+# shell that inspects such a run with the ros2 CLI sources this with it; docs/deployment.md).
+if [ "${PHD_SWARM_DDS:-localhost}" = "profile" ]; then
+  export ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT
+  export FASTRTPS_DEFAULT_PROFILES_FILE="$PHD_SWARM_ROOT/config/dds/loopback_udp.xml"
+  export FASTDDS_DEFAULT_PROFILES_FILE="$FASTRTPS_DEFAULT_PROFILES_FILE"
+fi
 export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-42}"
 export PYTHONUNBUFFERED=1

@@ -326,8 +326,9 @@ class WorldNode(Node):
             causes.append(f"robots {ranges(unseen)} are not in the ROS graph: their processes "
                           "did not start, exited (see their logs), or were not discovered "
                           "(with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST only 32 DDS "
-                          "participants per host find each other; use a discovery server, "
-                          "run_swarm.sh --discovery-server on, or --robots-per-process)")
+                          "participants per host find each other; use the repository's "
+                          "Fast DDS profile, run_swarm.sh --dds profile, the default above "
+                          "30 processes, or --robots-per-process)")
         if seen:
             causes.append(f"robots {ranges(seen)} run but did not report READY: they wait "
                           "for the team state, their contacts' inboxes or the observers to "

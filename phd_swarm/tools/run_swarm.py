@@ -51,6 +51,13 @@ from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 #: simple discovery among ~40 processes on 2 cores lost matches).
 AUTO_SERVER_PROCESSES = 16
 
+#: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
+#: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
+AUTO_PROFILE_PROCESSES = 30
+
+#: The Fast DDS profile of ``--dds profile``: UDP on 127.0.0.1 only, 160 ports probed.
+DDS_PROFILE = Path(__file__).resolve().parents[2] / "config" / "dds" / "loopback_udp.xml"
+
 #: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
 STOP_GRACE = 6.0
 
@@ -80,6 +87,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="off",
                    help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
                         f"{AUTO_SERVER_PROCESSES} processes)")
+    p.add_argument("--dds", choices=("auto", "localhost", "profile"), default="auto",
+                   help="DDS discovery on loopback: Jazzy's LOCALHOST range (at most 32 "
+                        "processes find each other), the repository's Fast DDS profile "
+                        "config/dds/loopback_udp.xml (UDP bound to 127.0.0.1, 160 ports), or "
+                        f"auto: the profile above {AUTO_PROFILE_PROCESSES} processes")
     p.add_argument("--drop", type=float, metavar="P",
                    help="fault injection: lose each protocol message with probability P")
     p.add_argument("--delay", type=float, metavar="P",
@@ -253,13 +265,13 @@ def run(opts: argparse.Namespace) -> int:
                   "params_file": str(run_dir / "config.yaml"), "discover": False,
                   "record_inboxes": bool(opts.record_inboxes)})
     params = rc.write_params(run_dir / "config.yaml")
-    env = dict(os.environ)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    per = max(1, opts.robots_per_process)
+    processes = -(-s.robots // per) + 2 + int(record)
+    env = dds_env(os.environ, opts.dds == "profile" or (opts.dds == "auto"
+                                                        and processes > AUTO_PROFILE_PROCESSES))
     env.setdefault("ROS_DOMAIN_ID", "42")
     env["PYTHONUNBUFFERED"] = "1"
     common = ["--params-file", str(params)]
-    per = max(1, opts.robots_per_process)
-    processes = -(-s.robots // per) + 2 + int(record)
     server = None
     if opts.discovery_server == "on" or (opts.discovery_server == "auto"
                                          and processes > AUTO_SERVER_PROCESSES):
@@ -269,7 +281,9 @@ def run(opts: argparse.Namespace) -> int:
     print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
           f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed {s.seed}, "
           f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
-          + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else ""),
+          + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else "")
+          + (f", Fast DDS profile {DDS_PROFILE.name}"
+             if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT" else ""),
           flush=True)
     print(f"run_swarm: results in {run_dir}/", flush=True)
     swarm = Swarm(run_dir, env, opts.quiet)
@@ -374,6 +388,27 @@ def log_completeness(mcap: Path) -> Completeness | None:
     except (LogError, OSError):
         return None
     return None if meta is None else Completeness.from_dict(json.loads(meta["report"]))
+
+
+def dds_env(base: Any, profile: bool) -> dict[str, str]:
+    """``base`` with DDS kept on loopback: Jazzy's LOCALHOST range, or the repository's profile.
+
+    The profile (:data:`DDS_PROFILE`) needs ``ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT``:
+    with LOCALHOST rmw_fastrtps replaces its transports by shared memory and a UDP transport
+    probing 32 ports. Both name the profile file (Fast DDS 2.x reads FASTRTPS_..., 3.x
+    FASTDDS_...).
+    """
+    env = dict(base)
+    if profile:
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
+        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
+        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
+    else:
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
+            if env.get(var) == str(DDS_PROFILE):
+                del env[var]
+    return env
 
 
 def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,

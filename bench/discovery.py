@@ -1,0 +1,182 @@
+"""Discovery benchmark: how many processes on one host find each other, how fast, at what cost.
+
+Run with ``scripts/bench.sh discovery [--sizes 32,50,100] [--modes localhost,profile,server]
+[--duration 90] [--quick]``. For each mode and size N it starts N processes at once
+(``bench/discovery_peer.py``: one node, one publisher and one subscription on a shared
+topic), each printing every 0.5 s how many publishers of the topic it sees, and reports
+
+- ``all_matched``: how many processes saw all N publishers at some time;
+- ``matched_after_s``: the time from the start until the last of them did (None if not all);
+- ``min_seen``, ``median_seen``: the most publishers a process saw at once, least and median;
+- ``cpu_s``: the processes' CPU seconds (user + system) over the run, and per process;
+- ``max_rss_mb``: the largest resident memory of a process.
+
+Modes (every one on loopback, each with a ROS_DOMAIN_ID of its own):
+
+- ``localhost``: ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, Jazzy's default for our
+  scripts: rmw_fastrtps adds shared memory and a UDP transport that probes 32 ports;
+- ``profile``: ``SYSTEM_DEFAULT`` with the repository's Fast DDS profile
+  ``config/dds/loopback_udp.xml`` (UDP on 127.0.0.1 only, 160 ports probed, no shared
+  memory);
+- ``server``: ``LOCALHOST`` with a Fast DDS discovery server on 127.0.0.1
+  (``ROS_DISCOVERY_SERVER``), as ``run_swarm.sh --discovery-server on`` runs it;
+- ``server_profile``: the profile's transport with the discovery server.
+
+Processes are stopped by PID (their process group) whatever happens. Writes
+``bench/results/discovery-<date>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+from results_io import machine_meta, write_results
+
+ROOT = Path(__file__).resolve().parents[1]
+PEER = Path(__file__).with_name("discovery_peer.py")
+PROFILE = ROOT / "config" / "dds" / "loopback_udp.xml"
+MODES = ("localhost", "profile", "server", "server_profile")
+#: The domain of the first mode's runs; each run takes the next one.
+BASE_DOMAIN = 150
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def mode_env(mode: str, domain: int) -> tuple[dict[str, str], list[str] | None]:
+    """The environment of a mode's processes and the discovery server command (or None)."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
+    for var in ("ROS_DISCOVERY_SERVER", "FASTRTPS_DEFAULT_PROFILES_FILE",
+                "FASTDDS_DEFAULT_PROFILES_FILE", "ROS_STATIC_PEERS"):
+        env.pop(var, None)
+    server = None
+    if mode in ("profile", "server_profile"):
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
+        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(PROFILE)
+        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(PROFILE)
+    else:
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if mode in ("server", "server_profile"):
+        port = _free_port()
+        env["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{port}"
+        server = ["fast-discovery-server", "-i", "0", "-l", "127.0.0.1", "-p", str(port)]
+    return env, server
+
+
+def run(mode: str, n: int, duration: float, domain: int) -> dict[str, object]:
+    """Start ``n`` peers in ``mode``; their discovery figures (see the module docstring)."""
+    env, server_cmd = mode_env(mode, domain)
+    procs: list[subprocess.Popen] = []
+    server = None
+    lines: list[list[dict]] = [[] for _ in range(n)]
+    usage: dict[int, tuple[float, float]] = {}
+
+    def read(i: int, proc: subprocess.Popen) -> None:
+        for line in proc.stdout:
+            try:
+                lines[i].append(json.loads(line))
+            except json.JSONDecodeError:
+                pass
+
+    t0 = time.time()
+    try:
+        if server_cmd is not None:
+            server = subprocess.Popen(server_cmd, env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL, start_new_session=True)
+            time.sleep(1.0)
+        t0 = time.time()
+        threads = []
+        for i in range(n):
+            proc = subprocess.Popen([sys.executable, str(PEER), str(i), str(duration)],
+                                    env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                    text=True, start_new_session=True)
+            procs.append(proc)
+            th = threading.Thread(target=read, args=(i, proc), daemon=True)
+            th.start()
+            threads.append(th)
+        deadline = time.time() + duration + 60.0
+        for proc in procs:
+            # wait4 gives this child's own rusage (CPU, peak memory).
+            while True:
+                pid, status, ru = os.wait4(proc.pid, os.WNOHANG)
+                if pid:
+                    proc.returncode = os.waitstatus_to_exitcode(status)
+                    usage[proc.pid] = (ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0)
+                    break
+                if time.time() > deadline:
+                    break
+                time.sleep(0.1)
+        for th in threads:
+            th.join(timeout=5.0)
+    finally:
+        for p in [*procs, server]:
+            if p is not None and p.poll() is None and p.pid not in usage:
+                try:
+                    os.killpg(p.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                p.wait()
+    matched_at = []
+    for reports in lines:
+        hit = [r["t"] - t0 for r in reports if r["publishers"] >= n]
+        matched_at.append(min(hit) if hit else None)
+    # The most publishers each process saw at once (near the end, peers exit one by one).
+    peaks = [max((r["publishers"] for r in reports), default=0) for reports in lines]
+    done = [t for t in matched_at if t is not None]
+    cpu = sum(u[0] for u in usage.values())
+    return {"mode": mode, "processes": n, "duration_s": duration,
+            "all_matched": len(done),
+            "matched_after_s": round(max(done), 1) if len(done) == n else None,
+            "median_seen": sorted(peaks)[n // 2] if peaks else 0,
+            "min_seen": min(peaks) if peaks else 0,
+            "cpu_s": round(cpu, 1), "cpu_s_per_process": round(cpu / n, 2),
+            "max_rss_mb": round(max((u[1] for u in usage.values()), default=0.0), 1),
+            "exited": len(usage)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run every mode and size, print one line each and write the JSON."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--sizes", default="32,50,100", help="process counts, comma-separated")
+    p.add_argument("--modes", default="localhost,profile,server",
+                   help=f"comma-separated, of {', '.join(MODES)}")
+    p.add_argument("--duration", type=float, default=90.0, help="seconds each peer runs")
+    p.add_argument("--quick", action="store_true", help="10 processes, 15 s, profile only")
+    p.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results")
+    args = p.parse_args(argv)
+    sizes = [10] if args.quick else [int(s) for s in args.sizes.split(",")]
+    modes = ["profile"] if args.quick else args.modes.split(",")
+    duration = 15.0 if args.quick else args.duration
+    bad = [m for m in modes if m not in MODES]
+    if bad:
+        p.error(f"unknown mode(s) {bad}; choose from {MODES}")
+    rows = []
+    domain = BASE_DOMAIN
+    for mode in modes:
+        for n in sizes:
+            row = run(mode, n, duration, domain)
+            domain += 1
+            rows.append(row)
+            print(f"{mode:>14} {n:4d} processes: {row['all_matched']:4d} saw all "
+                  f"(after {row['matched_after_s']} s), most seen: min "
+                  f"{row['min_seen']} median {row['median_seen']}; CPU "
+                  f"{row['cpu_s']} s ({row['cpu_s_per_process']} s per process), "
+                  f"max RSS {row['max_rss_mb']} MB", flush=True)
+    write_results(args.out, "discovery", machine_meta(), rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,104 @@
+"""The repository's Fast DDS profile keeps every socket on 127.0.0.1, and peers still talk.
+
+``config/dds/loopback_udp.xml`` (with ``ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT``) is
+the discovery for teams of more than 32 processes on one host. A UDP socket bound to
+127.0.0.1 can only send from and receive on the loopback interface, so a process whose
+every UDP socket is bound there sends nothing on another interface. The test reads the
+processes' sockets from /proc: their inodes from /proc/PID/fd, their local addresses from
+/proc/PID/net/udp and udp6.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.ros
+
+ROOT = Path(__file__).resolve().parents[2]
+PEER = Path(__file__).with_name("loopback_peer.py")
+PROFILE = ROOT / "config" / "dds" / "loopback_udp.xml"
+
+
+def profile_env() -> dict[str, str]:
+    return {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SYSTEM_DEFAULT",
+            "FASTRTPS_DEFAULT_PROFILES_FILE": str(PROFILE),
+            "FASTDDS_DEFAULT_PROFILES_FILE": str(PROFILE)}
+
+
+def _hex_to_address(text: str) -> str:
+    """/proc/net/udp's ``0100007F:1CEB`` (IPv4, host byte order) or the IPv6 form."""
+    addr, _ = text.split(":")
+    raw = bytes.fromhex(addr)
+    if len(raw) == 4:
+        return ".".join(str(b) for b in raw[::-1])
+    words = [raw[i:i + 4][::-1] for i in range(0, 16, 4)]
+    return ":".join(w.hex() for w in words)
+
+
+def udp_bindings(pid: int) -> list[str]:
+    """Local addresses of the UDP sockets process ``pid`` holds."""
+    inodes = set()
+    for fd in os.listdir(f"/proc/{pid}/fd"):
+        try:
+            target = os.readlink(f"/proc/{pid}/fd/{fd}")
+        except OSError:
+            continue
+        if target.startswith("socket:["):
+            inodes.add(target[8:-1])
+    addresses = []
+    for table in ("udp", "udp6"):
+        path = Path(f"/proc/{pid}/net/{table}")
+        if not path.exists():
+            continue
+        for line in path.read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[9] in inodes:
+                addresses.append(_hex_to_address(fields[1]))
+    return addresses
+
+
+def test_the_address_parser_reads_both_tables():
+    assert _hex_to_address("0100007F:1CEB") == "127.0.0.1"
+    assert _hex_to_address("00000000:1CEB") == "0.0.0.0"
+    assert _hex_to_address("00000000000000000000000001000000:1CEB").endswith("00000001")
+
+
+def _bindings_while_talking(children, env) -> list[str]:
+    sub = children.start([sys.executable, str(PEER), "sub"], env=env)
+    pub = children.start([sys.executable, str(PEER), "pub"], env=env)
+    try:
+        out, err = sub.communicate(timeout=30.0)
+    except subprocess.TimeoutExpired:
+        children.stop(pub)
+        children.stop(sub)
+        pytest.fail("the subscriber received nothing within 30 s")
+    assert sub.returncode == 0, err
+    assert any(line.startswith("GOT 9") for line in out.splitlines()), out
+    time.sleep(0.5)
+    assert pub.poll() is None, "the publisher died early"
+    bindings = udp_bindings(pub.pid)
+    children.stop(pub)
+    return bindings
+
+
+def test_with_the_profile_every_socket_is_on_loopback(children):
+    bindings = _bindings_while_talking(children, profile_env())
+    assert bindings, "the publisher holds no UDP socket"
+    assert set(bindings) == {"127.0.0.1"}, bindings
+
+
+def test_jazzy_localhost_mode_binds_the_wildcard_address(children):
+    """Why the profile binds explicitly.
+
+    LOCALHOST confines where Fast DDS sends (unicast to 127.0.0.1, no multicast), but its
+    sockets listen on every interface.
+    """
+    bindings = _bindings_while_talking(children, {"ROS_AUTOMATIC_DISCOVERY_RANGE":
+                                                  "LOCALHOST"})
+    assert "0.0.0.0" in bindings, bindings
