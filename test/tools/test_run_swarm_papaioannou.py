@@ -1,8 +1,10 @@
 """Papaioannou et al.'s system through ``scripts/run_swarm.sh``: four agents, recorded.
 
-A 25-step run of ``config/papaioannou_small.yaml``: the log is complete for the system's
-own topics (estimates, goals, search maps, the agents' states and plans; no cell, density
-or components), the moves are those of eq. 4, and an agent's search map only fills up.
+A 25-step run of ``config/papaioannou_small.yaml`` on the repository's Fast DDS profile
+(``--dds profile``, UDP bound to 127.0.0.1; the other run_swarm tests use LOCALHOST): the
+log is complete for the system's own topics (estimates, goals, search maps, the agents'
+states and plans; no cell, density or components), the moves are those of eq. 4, and an
+agent's search map only fills up.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 
 def test_a_short_run_records_every_step_and_the_agents_estimates(tmp_path, record_swarm):
-    run = record_swarm(tmp_path, "papaioannou_small.yaml", "--duration", "25")
+    run = record_swarm(tmp_path, "papaioannou_small.yaml", "--duration", "25", "--dds",
+                       "profile")
     summary = json.loads((run / "summary.json").read_text())
     assert summary["complete"] and summary["steps"] == 25 and summary["dead_robots"] == []
     topics = summary["log_completeness"]["topics"]

@@ -1,0 +1,42 @@
+"""run_swarm's DDS choice: LOCALHOST for small teams, the repository's profile for large ones."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+from phd_swarm.tools.run_swarm import AUTO_PROFILE_PROCESSES, DDS_PROFILE, dds_env, parse_args
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_profile_replaces_localhost_and_back():
+    assert DDS_PROFILE.is_file() and AUTO_PROFILE_PROCESSES < 32
+    env = dds_env({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "X": "1"}, profile=True)
+    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT" and env["X"] == "1"
+    assert env["FASTRTPS_DEFAULT_PROFILES_FILE"] == env["FASTDDS_DEFAULT_PROFILES_FILE"] \
+        == str(DDS_PROFILE)
+    back = dds_env(env, profile=False)
+    assert back["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert "FASTRTPS_DEFAULT_PROFILES_FILE" not in back
+    # A profile file of the user's own is left alone.
+    mine = dds_env({"FASTRTPS_DEFAULT_PROFILES_FILE": "/elsewhere.xml"}, profile=False)
+    assert mine["FASTRTPS_DEFAULT_PROFILES_FILE"] == "/elsewhere.xml"
+
+
+def test_the_option_defaults_to_auto():
+    assert parse_args(["config/dames_static.yaml"]).dds == "auto"
+    assert parse_args(["config/dames_static.yaml", "--dds", "profile"]).dds == "profile"
+
+
+def test_env_sh_selects_the_profile_on_request():
+    def sourced(prefix: str) -> list[str]:
+        out = subprocess.run(["bash", "-c", f"{prefix} source scripts/env.sh >/dev/null; "
+                              "echo $ROS_AUTOMATIC_DISCOVERY_RANGE "
+                              "${FASTRTPS_DEFAULT_PROFILES_FILE:-none}"],
+                             cwd=ROOT, capture_output=True, text=True, check=True,
+                             env={"PATH": "/usr/bin:/bin", "HOME": "/tmp"})
+        return out.stdout.split()
+
+    assert sourced("PHD_SWARM_DDS=profile") == ["SYSTEM_DEFAULT", str(DDS_PROFILE)]
+    assert sourced("") == ["LOCALHOST", "none"]
