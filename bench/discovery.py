@@ -41,9 +41,10 @@ from pathlib import Path
 
 from results_io import machine_meta, write_results
 
+from phd_swarm.tools.dds import dds_env
+
 ROOT = Path(__file__).resolve().parents[1]
 PEER = Path(__file__).with_name("discovery_peer.py")
-PROFILE = ROOT / "config" / "dds" / "loopback_udp.xml"
 MODES = ("localhost", "profile", "server", "server_profile")
 #: The domain of the first mode's runs; each run takes the next one.
 BASE_DOMAIN = 150
@@ -57,17 +58,11 @@ def _free_port() -> int:
 
 def mode_env(mode: str, domain: int) -> tuple[dict[str, str], list[str] | None]:
     """The environment of a mode's processes and the discovery server command (or None)."""
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
-    for var in ("ROS_DISCOVERY_SERVER", "FASTRTPS_DEFAULT_PROFILES_FILE",
-                "FASTDDS_DEFAULT_PROFILES_FILE", "ROS_STATIC_PEERS"):
+    env = dds_env(os.environ, profile=mode in ("profile", "server_profile"))
+    env.update(ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
+    for var in ("ROS_DISCOVERY_SERVER", "ROS_STATIC_PEERS"):
         env.pop(var, None)
     server = None
-    if mode in ("profile", "server_profile"):
-        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
-        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(PROFILE)
-        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(PROFILE)
-    else:
-        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     if mode in ("server", "server_profile"):
         port = _free_port()
         env["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{port}"

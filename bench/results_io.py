@@ -8,6 +8,7 @@ import os
 import platform
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,30 @@ def write_results(out: Path, suite: str, meta: dict[str, object], results: list)
     path.write_text(json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
     print(f"wrote {path}")
     return path
+
+
+def time_trial(sc, score: bool = True) -> tuple[float, float]:
+    """CPU seconds of a distributed-engine trial's steps, and of its per-step scoring.
+
+    The scoring is what the sweeps do each step (OSPA of the team's estimates and the
+    system's figures); 0 unless ``score``.
+    """
+    from phd_swarm.core.scoring import score_estimates
+    from phd_swarm.engines import make_engine
+
+    engine = make_engine("distributed", sc)
+    engine_s = score_s = 0.0
+    for _ in range(sc.steps):
+        _, truth = engine.world.truth()
+        t0 = time.process_time()
+        engine.step()
+        t1 = time.process_time()
+        engine_s += t1 - t0
+        if score:
+            score_estimates(*engine.team_estimates(), truth, sc.ospa_c, sc.ospa_p)
+            engine.figures(truth)
+            score_s += time.process_time() - t1
+    return engine_s, score_s
 
 
 def run_swarm_figures(config: Path, *options: str) -> dict[str, object]:

@@ -17,15 +17,12 @@ Writes ``bench/results/shirsat-<date>.json``.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import numpy as np
-from results_io import machine_meta, run_swarm_figures, write_results
+from results_io import machine_meta, run_swarm_figures, time_trial, write_results
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
-from phd_swarm.core.scoring import score_estimates
-from phd_swarm.engines import make_engine
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,17 +36,7 @@ def run_trial(steps: int | None) -> tuple[float, float, int]:
     sc = trial.scenario
     if steps is not None:
         sc = sc.with_overrides(duration=steps * sc.dt)
-    engine = make_engine("distributed", sc)
-    engine_s = score_s = 0.0
-    for _ in range(sc.steps):
-        _, truth = engine.world.truth()
-        t0 = time.process_time()
-        engine.step()
-        t1 = time.process_time()
-        score_estimates(*engine.team_estimates(), truth, sc.ospa_c, sc.ospa_p)
-        engine.figures(truth)
-        score_s += time.process_time() - t1
-        engine_s += t1 - t0
+    engine_s, score_s = time_trial(sc)
     return engine_s, score_s, sc.steps * sc.robots
 
 

@@ -23,12 +23,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from results_io import machine_meta, run_swarm_figures, write_results
+from results_io import machine_meta, run_swarm_figures, time_trial, write_results
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.estimators.gp_motion import GpHyperparameters, predict_tracks
-from phd_swarm.core.scoring import score_estimates
-from phd_swarm.engines import make_engine
 
 
 def _trial(spec: str, method: str, steps: int | None):
@@ -42,19 +40,7 @@ def _trial(spec: str, method: str, steps: int | None):
 
 def run_trial(sc, score: bool) -> tuple[float, float]:
     """CPU seconds of the engine's steps, and of the scoring (0 unless ``score``)."""
-    engine = make_engine("distributed", sc)
-    engine_s = score_s = 0.0
-    for _ in range(sc.steps):
-        _, truth = engine.world.truth()
-        t0 = time.process_time()
-        engine.step()
-        t1 = time.process_time()
-        engine_s += t1 - t0
-        if score:
-            score_estimates(*engine.team_estimates(), truth, sc.ospa_c, sc.ospa_p)
-            engine.figures(truth)
-            score_s += time.process_time() - t1
-    return engine_s, score_s
+    return time_trial(sc, score)
 
 
 def gp_cost(tracks: int, window: int, repeats: int = 200) -> float:

@@ -45,6 +45,7 @@ from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
+from phd_swarm.tools.dds import DDS_PROFILE, dds_env
 from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
@@ -54,9 +55,6 @@ AUTO_SERVER_PROCESSES = 16
 #: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
 #: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
 AUTO_PROFILE_PROCESSES = 30
-
-#: The Fast DDS profile of ``--dds profile``: UDP on 127.0.0.1 only, 160 ports probed.
-DDS_PROFILE = Path(__file__).resolve().parents[2] / "config" / "dds" / "loopback_udp.xml"
 
 #: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
 STOP_GRACE = 6.0
@@ -388,27 +386,6 @@ def log_completeness(mcap: Path) -> Completeness | None:
     except (LogError, OSError):
         return None
     return None if meta is None else Completeness.from_dict(json.loads(meta["report"]))
-
-
-def dds_env(base: Any, profile: bool) -> dict[str, str]:
-    """``base`` with DDS kept on loopback: Jazzy's LOCALHOST range, or the repository's profile.
-
-    The profile (:data:`DDS_PROFILE`) needs ``ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT``:
-    with LOCALHOST rmw_fastrtps replaces its transports by shared memory and a UDP transport
-    probing 32 ports. Both name the profile file (Fast DDS 2.x reads FASTRTPS_..., 3.x
-    FASTDDS_...).
-    """
-    env = dict(base)
-    if profile:
-        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
-        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
-        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
-    else:
-        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-        for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
-            if env.get(var) == str(DDS_PROFILE):
-                del env[var]
-    return env
 
 
 def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,

@@ -160,3 +160,16 @@ def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
     assert [(r["particles"], r["moves"]) for r in rewards] == [(300, 17), (1200, 17),
                                                                 (6000, 17)]
     assert all(r["median_ms"] > 0 for r in rewards)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "discovery", "--quick",
+                             "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    (row,) = json.loads(next(tmp_path.glob("discovery-*.json")).read_text())["results"]
+    assert (row["mode"], row["processes"], row["exited"]) == ("profile", 10, 10)
+    assert row["all_matched"] == 10 and row["min_seen"] == 10
+    assert row["cpu_s"] > 0 and row["max_rss_mb"] > 0

@@ -239,6 +239,15 @@ def _wait_for(path: Path, text: str, proc, timeout: float = 120.0) -> None:
         time.sleep(0.1)
 
 
+def _wait_for_step(monitor: Path, printed: int, proc, timeout: float = 120.0) -> None:
+    """Wait until the monitor's progress shows step ``printed`` (k + 1) or a later one."""
+    deadline = time.monotonic() + timeout
+    while not (monitor.exists() and any(int(k) >= printed for k in
+                                        re.findall(r"step (\d+)/", monitor.read_text()))):
+        assert proc.poll() is None and time.monotonic() < deadline, "the team stopped"
+        time.sleep(0.1)
+
+
 def _rejoin_and_stop(run: Path, robot: int, proc) -> int:
     """Wait until ``robot`` rejoined and 20 more steps were scored, then Ctrl-C the run.
 
@@ -303,7 +312,15 @@ def test_a_robot_counted_dead_rejoins_the_team(tmp_path, children, how):
     assert pid is not None
     os.kill(pid, signal.SIGKILL if how == "restarted" else signal.SIGSTOP)
     try:
-        _wait_for(run / "logs" / "world.log", "robot 2 did not report", proc)
+        world = run / "logs" / "world.log"
+        _wait_for(world, "robot 2 did not report", proc)
+        if how == "slow":
+            # Stay stopped until the monitor has scored the next step, whose team state
+            # shows robot 2 dead: resumed at once, it would be back before that step
+            # began, and the run would record no step without it (so no rejoin).
+            killed = int(re.search(r"robot 2 did not report step (\d+)",
+                                   world.read_text()).group(1))
+            _wait_for_step(run / "logs" / "monitor.log", killed + 2, proc)
     finally:
         if how == "slow":
             os.kill(pid, signal.SIGCONT)

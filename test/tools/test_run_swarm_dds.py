@@ -5,7 +5,8 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
-from phd_swarm.tools.run_swarm import AUTO_PROFILE_PROCESSES, DDS_PROFILE, dds_env, parse_args
+from phd_swarm.tools.dds import DDS_PROFILE, dds_env
+from phd_swarm.tools.run_swarm import AUTO_PROFILE_PROCESSES, parse_args
 
 ROOT = Path(__file__).resolve().parents[2]
 
