@@ -51,7 +51,17 @@ fi
 # PHD_SWARM_DDS=profile: the repository's Fast DDS profile instead of LOCALHOST (UDP bound to
 # 127.0.0.1, 160 participant ports probed; what run_swarm.sh uses above 30 processes, so a
 # shell that inspects such a run with the ros2 CLI sources this with it; docs/deployment.md).
+case "${PHD_SWARM_DDS:-localhost}" in
+  localhost|profile) ;;
+  *) echo "env.sh: PHD_SWARM_DDS must be localhost or profile, got '${PHD_SWARM_DDS}'" >&2
+     return 2 ;;
+esac
 if [ "${PHD_SWARM_DDS:-localhost}" = "profile" ]; then
+  if [ ! -f "$PHD_SWARM_ROOT/config/dds/loopback_udp.xml" ]; then
+    echo "env.sh: PHD_SWARM_DDS=profile but $PHD_SWARM_ROOT/config/dds/loopback_udp.xml is" \
+      "missing; without it DDS would not stay on loopback" >&2
+    return 2
+  fi
   export ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT
   export FASTRTPS_DEFAULT_PROFILES_FILE="$PHD_SWARM_ROOT/config/dds/loopback_udp.xml"
   export FASTDDS_DEFAULT_PROFILES_FILE="$FASTRTPS_DEFAULT_PROFILES_FILE"

@@ -20,10 +20,15 @@ def dds_env(base: Mapping[str, str], profile: bool) -> dict[str, str]:
     The profile (:data:`DDS_PROFILE`) needs ``ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT``:
     with LOCALHOST rmw_fastrtps replaces its transports by shared memory and a UDP transport
     probing 32 ports. Both name the profile file (Fast DDS 2.x reads FASTRTPS_..., 3.x
-    FASTDDS_...).
+    FASTDDS_...). Raises FileNotFoundError if the profile is missing.
     """
     env = dict(base)
     if profile:
+        # Fast DDS ignores a profile file it cannot read and falls back to its defaults,
+        # which discover over multicast on every interface: refuse instead.
+        if not DDS_PROFILE.is_file():
+            raise FileNotFoundError(f"the Fast DDS profile {DDS_PROFILE} is missing; without "
+                                    "it DDS would not stay on loopback")
         env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
         env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
         env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)

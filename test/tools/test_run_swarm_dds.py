@@ -5,6 +5,8 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from phd_swarm.tools.dds import DDS_PROFILE, dds_env
 from phd_swarm.tools.run_swarm import AUTO_PROFILE_PROCESSES, parse_args
 
@@ -41,3 +43,16 @@ def test_env_sh_selects_the_profile_on_request():
 
     assert sourced("PHD_SWARM_DDS=profile") == ["SYSTEM_DEFAULT", str(DDS_PROFILE)]
     assert sourced("") == ["LOCALHOST", "none"]
+    bad = subprocess.run(["bash", "-c", "PHD_SWARM_DDS=udp source scripts/env.sh"], cwd=ROOT,
+                         capture_output=True, text=True, check=False,
+                         env={"PATH": "/usr/bin:/bin", "HOME": "/tmp"})
+    assert bad.returncode == 2 and "PHD_SWARM_DDS must be localhost or profile, got 'udp'" \
+        in bad.stderr
+
+
+def test_a_missing_profile_is_refused(monkeypatch, tmp_path):
+    from phd_swarm.tools import dds
+
+    monkeypatch.setattr(dds, "DDS_PROFILE", tmp_path / "gone.xml")
+    with pytest.raises(FileNotFoundError, match="gone.xml is missing"):
+        dds.dds_env({}, profile=True)
