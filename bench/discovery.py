@@ -70,8 +70,13 @@ def mode_env(mode: str, domain: int) -> tuple[dict[str, str], list[str] | None]:
     return env, server
 
 
-def run(mode: str, n: int, duration: float, domain: int) -> dict[str, object]:
-    """Start ``n`` peers in ``mode``; their discovery figures (see the module docstring)."""
+def run(mode: str, n: int, duration: float, domain: int,
+        stop_when_matched: bool = False) -> dict[str, object]:
+    """Start ``n`` peers in ``mode``; their discovery figures (see the module docstring).
+
+    With ``stop_when_matched`` the peers are stopped (SIGINT) as soon as every one of them
+    has seen all ``n`` publishers, ``duration`` being only the cap.
+    """
     env, server_cmd = mode_env(mode, domain)
     procs: list[subprocess.Popen] = []
     server = None
@@ -102,6 +107,13 @@ def run(mode: str, n: int, duration: float, domain: int) -> dict[str, object]:
             th.start()
             threads.append(th)
         deadline = time.time() + duration + 60.0
+        if stop_when_matched:
+            while (time.time() < t0 + duration
+                   and not all(any(r["publishers"] >= n for r in reports)
+                               for reports in lines)):
+                time.sleep(0.2)
+            for proc in procs:
+                proc.send_signal(signal.SIGINT)
         for proc in procs:
             # wait4 gives this child's own rusage (CPU, peak memory).
             while True:
@@ -148,12 +160,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--modes", default="localhost,profile,server",
                    help=f"comma-separated, of {', '.join(MODES)}")
     p.add_argument("--duration", type=float, default=90.0, help="seconds each peer runs")
-    p.add_argument("--quick", action="store_true", help="10 processes, 15 s, profile only")
+    p.add_argument("--quick", action="store_true", help="10 processes, profile only, stopped "
+                   "once all matched (at most 120 s)")
     p.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results")
     args = p.parse_args(argv)
-    sizes = [10] if args.quick else [int(s) for s in args.sizes.split(",")]
+    try:
+        sizes = [10] if args.quick else [int(s) for s in args.sizes.split(",")]
+    except ValueError:
+        p.error(f"--sizes must be comma-separated process counts, got {args.sizes!r}")
     modes = ["profile"] if args.quick else args.modes.split(",")
-    duration = 15.0 if args.quick else args.duration
+    duration = 120.0 if args.quick else args.duration
     bad = [m for m in modes if m not in MODES]
     if bad:
         p.error(f"unknown mode(s) {bad}; choose from {MODES}")
@@ -161,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     domain = BASE_DOMAIN
     for mode in modes:
         for n in sizes:
-            row = run(mode, n, duration, domain)
+            row = run(mode, n, duration, domain, stop_when_matched=args.quick)
             domain += 1
             rows.append(row)
             print(f"{mode:>14} {n:4d} processes: {row['all_matched']:4d} saw all "

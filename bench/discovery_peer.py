@@ -3,8 +3,8 @@
 Usage: ``python bench/discovery_peer.py INDEX DURATION_S``. Creates a node with a publisher
 and a subscription on ``/phd_swarm_discovery`` and prints, every 0.5 s, one JSON line
 ``{"t": <unix time>, "publishers": <publishers of the topic this process sees>}`` until
-DURATION_S has passed, then exits 0. The environment (domain, discovery range, Fast DDS
-profile, discovery server) is the parent's.
+DURATION_S has passed or it is interrupted (SIGINT), then exits 0. The environment
+(domain, discovery range, Fast DDS profile, discovery server) is the parent's.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from std_msgs.msg import Empty
 
 TOPIC = "/phd_swarm_discovery"
@@ -37,6 +37,8 @@ def main(index: int, duration: float) -> int:
                 print(json.dumps({"t": time.time(),
                                   "publishers": node.count_publishers(TOPIC)}), flush=True)
                 next_report += 0.5
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass                                                     # stopped by the parent
     finally:
         executor.shutdown()
         node.destroy_node()
