@@ -199,7 +199,7 @@ class PapaioannouEstimator(Estimator):
         s = self.setup
         sensor = scan.sensor
         z = check_measurements(scan.z, 2)
-        previous = self._states
+        last_states = self._states
         born = (self._births_near(z, sensor) if s.measurement_births
                 else self._births(sensor))
         particles = ParticleSet.concatenate([self.particles, born]) if len(born) else \
@@ -208,6 +208,8 @@ class PapaioannouEstimator(Estimator):
         p_d = np.where(s.sensor.inside(states[:, :2], sensor), s.sensor.p_d, 0.0)
         result = update(particles, z, lambda zz, x: self._sensor.log_likelihood(
             zz, x[:, :2], sensor), p_d, s.sensor.clutter_intensity(z, sensor))
+        # Measurements the particles, births included, took with weight > 0.5.
+        seen = extract_by_measurement(result) if s.extraction != "square" else None
         if s.extraction == "square":
             # Sec. V-A: n^ = round(mass inside the sensing square), the n^ highest peaks of
             # the PHD there (k-means of the particles in the square, Vo et al. 2005).
@@ -221,14 +223,13 @@ class PapaioannouEstimator(Estimator):
             # before this scan (U(z) > 0.5) gives an estimate; births report a step later.
             self._states = result.detection_means[result.persistent_mass > 0.5].copy()
         else:
-            self._states = extract_by_measurement(result)
+            self._states = seen.copy()
         if s.hold_gate > 0.0 and s.extraction != "square":
             self._states = np.concatenate([self._states,
-                                           self._held(previous, result.particles,
+                                           self._held(last_states, result.particles,
                                                       self._states)])
         self._tentative = np.empty((0, 4))
-        if s.look_tentative and s.extraction != "square":
-            seen = extract_by_measurement(result)
+        if s.look_tentative and seen is not None:
             if len(seen) and len(self._states):
                 gate = max(s.hold_gate, 1e-9)
                 seen = seen[~(cdist(seen[:, :2], self._states[:, :2]) <= gate).any(axis=1)]
