@@ -167,10 +167,12 @@ def small_static_scenario(robots: int = 5, steps: int = 64, seed: int = 7) -> An
 
 
 def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str | None = None,
-                observers: int = 1, **world: Any) -> tuple[Any, Any, list[Any]]:
+                observers: int = 1, robot: dict[str, Any] | None = None,
+                **world: Any) -> tuple[Any, Any, list[Any]]:
     """World, monitor (keeping its images) and one robot node per robot on ``ros``.
 
-    ``controller`` replaces ``scenario.system.controller`` if given.
+    ``controller`` replaces ``scenario.system.controller`` if given; ``robot`` and
+    ``world`` override those nodes' parameters.
 
     Writes the resolved parameter file to ``tmp_dir/params.yaml`` and starts every node
     from it, as the scripts do. Spin ``ros`` until ``monitor.done``.
@@ -194,7 +196,7 @@ def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str 
         scenario = scenario.with_system(controller=controller)
     rc = RunConfig(scenario).with_overrides(
         world={"observers": observers, **world},
-        robot={"observers": observers},
+        robot={"observers": observers, **(robot or {})},
         monitor={"progress_every": 0})
     params = rc.write_params(Path(tmp_dir) / "params.yaml")
     args = ["--ros-args", "--params-file", str(params)]

@@ -42,7 +42,8 @@ ROBOT = (
               low=-1, high=1_000_000),
     ParamSpec("tick_period", 1.0, "Wall seconds without a new protocol message after which "
               "one timeout round passes, and a waiting robot sends a keep-alive; also the "
-              "period of its WORKING status to the world while a step lasts [s].",
+              "period of its WORKING status to the world while a step lasts or it waits for the "
+              "next one [s].",
               low=0.01, high=600.0),
     ParamSpec("timeout_ticks", 5, "Rounds without an answer before an awaited peer not "
               "heard from in that time (keep-alives included) is declared dead.", low=1,

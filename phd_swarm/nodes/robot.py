@@ -30,7 +30,12 @@ Liveness is apart from progress: a thread of the node's own publishes a ``WORKIN
 once per ``tick_period`` while a step is in progress, so a robot that waits on a dead peer,
 or whose executor works through a backlog of messages on a loaded machine, is not taken
 for dead by the world; it stops when the executor has run no callback for
-:data:`HUNG_AFTER` s (or 3 x ``timeout_ticks`` periods, if longer).
+:data:`HUNG_AFTER` s (or 3 x ``timeout_ticks`` periods, if longer). It goes on between
+steps, while the robot waits for the next step's measurement set and team state, for at
+most :data:`HUNG_AFTER` s: a reliable sample that DDS lost on the way (to or from the world)
+is repaired at the writer's next heartbeat, seconds later, and a robot waiting for that
+repair is slow, not dead. Each such status also shows the world's status reader at once
+that an earlier sample (the step's ``STEP_DONE``) is missing, so it is re-sent at once.
 
 Membership comes from the world's team state (``/world/robots``: ids, positions, alive
 flags), which the robot reads every step: step k starts when both the measurement set and
@@ -136,6 +141,7 @@ class RobotNode(Node):
         self._started = time.monotonic()
         self._peer_pubs: dict[tuple[int, str], object] = {}
         self._finished = -1
+        self._finished_at = time.monotonic()
         #: The world's team states by step: (ids, positions (R, 2), alive flags).
         self.teams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         #: Counted dead by the world: steps up to ``join_after`` are not this robot's.
@@ -370,12 +376,16 @@ class RobotNode(Node):
         """
         period = self.params["tick_period"]
         while not self._beat_stop.wait(period):
-            if not self.ready or time.monotonic() - self._alive_at > self._hung_after:
+            now = time.monotonic()
+            if not self.ready or now - self._alive_at > self._hung_after:
                 continue
             if self.evicted:
                 step = self.join_after  # still here: the world lets it rejoin
             elif not self.filter.done:
                 step = self.filter.step
+            elif 0 <= self._finished < self.scenario.steps - 1 \
+                    and now - self._finished_at <= self._hung_after:
+                step = self._finished  # waiting for the next step's inputs
             else:
                 continue
             try:
@@ -404,6 +414,7 @@ class RobotNode(Node):
         f = self.filter
         k = f.step
         self._finished = k
+        self._finished_at = time.monotonic()
         for old in [s for s in self._received if s < k]:
             del self._received[old]
         d = self.agent.finish_step()

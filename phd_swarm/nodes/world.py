@@ -8,16 +8,16 @@ Per step k it publishes ``/clock`` (t = k dt), the team state (``/world/robots``
 ``STEP_DONE`` status (goal g_r) from ``/robot_<r>/status``:
 
 - lockstep (default): step k+1 starts when every live robot has reported step k. Liveness
-  is apart from progress: a robot working on a step sends a ``WORKING`` status once per
-  ``tick_period`` (its protocol's own period), and only a robot from which *nothing* was
-  heard for ``step_timeout`` wall seconds counts as dead (the world stops scanning and
-  moving it, and says so in the team state). A robot blocked on a dead peer keeps saying
-  it is alive until its protocol times that peer out, so it is never taken for dead; the
-  config check keeps ``step_timeout`` >= 3 ``tick_period`` s. A robot counted dead that is
-  heard from again (it was only slow, or its process was restarted and reports ``READY``)
-  is alive again from the next step (it rejoins, :mod:`phd_swarm.nodes.robot`); a
-  ``READY`` from a robot the world counts alive mid-run means its process restarted: it is
-  counted dead at once and rejoins at the next step;
+  is apart from progress: a robot working on a step, or waiting for the next one's inputs,
+  sends a ``WORKING`` status once per ``tick_period`` (its protocol's own period), and only
+  a robot from which *nothing* was heard for ``step_timeout`` wall seconds counts as dead
+  (the world stops scanning and moving it, and says so in the team state). A robot blocked
+  on a dead peer keeps saying it is alive until its protocol times that peer out, so it is
+  never taken for dead; the config check keeps ``step_timeout`` >= 3 ``tick_period`` s. A
+  robot counted dead that is heard from again (it was only slow, or its process was
+  restarted and reports ``READY``) is alive again from the next step (it rejoins,
+  :mod:`phd_swarm.nodes.robot`); a ``READY`` from a robot the world counts alive mid-run
+  means its process restarted: it is counted dead at once and rejoins at the next step;
 - realtime: steps follow a wall-clock timer at ``dt / realtime_factor``; a robot that has
   not reported keeps its last goal, and one not heard from at all for ``step_timeout``
   counts as dead (and may rejoin, as in lockstep).

@@ -64,7 +64,7 @@ DESCRIPTIONS: dict[str, str] = {
     ROBOT_PATTERN.format("status"): "READY at start-up, then STEP_DONE with goal, power "
                                     "weight and counters: the world's lockstep hand-shake; "
                                     "WORKING once per tick_period while a step lasts "
-                                    "(liveness).",
+                                    "or the robot waits for the next (liveness).",
     ROBOT_PATTERN.format("cell"): "The robot's own cell (Voronoi or power diagram clipped to "
                                   "E) and neighbour ids, for observers.",
     ROBOT_PATTERN.format("density"): "The robot's PHD over a window of the grid (parameter "
