@@ -30,7 +30,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import ndimage
 
 from .grid import Grid
 from .models import PhdModels
@@ -251,7 +251,11 @@ def convolve_mass(mass: np.ndarray, kernel: np.ndarray, method: str = "auto") ->
         return mass.copy()
     if method == "direct" or (method == "auto" and kernel.size <= DIRECT_MAX_TAPS):
         return ndimage.convolve(mass, kernel, mode="constant", cval=0.0)
-    out = signal.fftconvolve(mass, kernel, mode="same")
+    # Imported here: scipy.signal (and scipy.stats, which it imports) take ~0.5 s to import,
+    # a cost every robot process would pay at start-up for a path few scenarios take.
+    from scipy.signal import fftconvolve
+
+    out = fftconvolve(mass, kernel, mode="same")
     out[out < FFT_REL_FLOOR * max(float(out.max()), 0.0)] = 0.0
     return out
 
