@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
 # The test command (README, .ci/run): set up if needed, then run pytest; its verdict is ours.
-# Extra arguments go to pytest, e.g. `scripts/test.sh test/core -k ospa`.
+#
+# Without arguments, two runs: the tests that start ROS (marker `ros`) one at a time, on a
+# machine otherwise quiet, as their start-up and deadlines assume; then the rest on every
+# core with pytest-xdist (PHD_SWARM_TEST_WORKERS workers, default: one per core). It fails
+# if either fails.
+# With arguments, one pytest run with them, e.g. `scripts/test.sh test/core -k ospa`.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh"
@@ -9,12 +14,20 @@ set +u
 source "$ROOT/scripts/env.sh"
 set -u
 cd "$ROOT"
-set +e
-python -m pytest "$@"
-rc=$?
-set -e
-if [ "$rc" -eq 5 ]; then
-  echo "test.sh: pytest collected no tests; that is a failure" >&2
-  exit 1
+run_pytest() {
+  local rc=0
+  python -m pytest "$@" || rc=$?
+  if [ "$rc" -eq 5 ]; then
+    echo "test.sh: pytest collected no tests (pytest $*); that is a failure" >&2
+    rc=1
+  fi
+  return "$rc"
+}
+if [ $# -gt 0 ]; then
+  run_pytest "$@"
+  exit $?
 fi
+rc=0
+run_pytest -m ros || rc=$?
+run_pytest -m "not ros" -n "${PHD_SWARM_TEST_WORKERS:-auto}" --dist worksteal || rc=$?
 exit "$rc"

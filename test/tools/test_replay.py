@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import signal
 import subprocess
@@ -178,6 +179,19 @@ def _finish(children, proc) -> tuple[int, str]:
         children.stop(proc)
         raise
     return proc.returncode, err
+
+
+@pytest.mark.ros
+def test_the_docs_example_receives_every_metric(recorded_run, monkeypatch):
+    """docs/replay.md's example, on this session's recorded run instead of the demo's."""
+    (code,) = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "replay.md").read_text(),
+                         re.S)
+    steps = str(json.loads((recorded_run / "summary.json").read_text())["steps"])
+    assert code.count("runs/demo/run.mcap") == 1 and code.count("240") == 2
+    code = code.replace("runs/demo/run.mcap", str(recorded_run / "run.mcap")).replace(
+        "240", steps)
+    monkeypatch.chdir(ROOT)
+    exec(compile(code, "replay.md[0]", "exec"), {})  # noqa: S102 - our own docs
 
 
 @pytest.mark.ros
