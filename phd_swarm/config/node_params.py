@@ -89,6 +89,10 @@ RECORDER = (
               "(/clock, /world/*, /monitor/*, /robot_*/*) as they appear."),
     ParamSpec("record_inboxes", False, "Also record the protocol traffic (/robot_*/inbox/*): "
               "~90 % of a run's messages, not needed to re-evaluate or replay the results."),
+    ParamSpec("wait_for_world", True, "With params_file: subscribe to /world/truth (which the "
+              "world counts to start step 0) only once every other topic the world writes "
+              "has matched a writer here, so that the run cannot start before the log can "
+              "hold it."),
 )
 
 #: Node key in a config file -> its parameters.

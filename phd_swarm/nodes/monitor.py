@@ -158,6 +158,8 @@ class MonitorNode(Node):
                 self.create_subscription(CellPolygon, T.robot_topic(r, "cell"),
                                          self._on_cell, subscription_qos("LATCHED"))
         self.create_timer(0.5, self._on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.get_logger().info(f"monitor: watching {self.scenario.robots} robots "
+                               f"({', '.join(self.inputs)}, status)")
 
     # ---------------------------------------------------------------- inputs
     def _on_truth(self, msg: TargetSet) -> None:

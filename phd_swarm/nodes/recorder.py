@@ -9,7 +9,14 @@ Topics
     every topic of :func:`phd_swarm.nodes.topics.run_topics` for the scenario's team, with
     the table's reader QoS (keep-all for the step topics, so the reader never drops a
     message it has not handed over; others deepened to :data:`MIN_TABLE_DEPTH`); the world
-    and the robots count it among their ``observers`` before step 0. The protocol inboxes
+    and the robots count it among their ``observers`` before step 0. With ``wait_for_world``
+    (the default) the truth comes last: the world counts the recorder by its truth
+    subscription, so the recorder subscribes to it only once each of the world's other
+    topics (clock, team state, markers, every robot's pose and measurement set) has matched
+    a writer here, and logs every few seconds how many it still waits for. Then step 0
+    cannot begin before every world writer reaches the log (at 50 robot processes the
+    recorder matched the world's last writers late, or not at all, while the run went on).
+    The protocol inboxes
     (``/robot_<n>/inbox/*``, ~90 % of a run's messages) only with ``record_inboxes``. With
     ``discover`` on, it also polls the graph every 0.5 s (wall time) and subscribes to new
     topics under ``/clock``, ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table
@@ -95,6 +102,10 @@ SETTLE_MAX = 10.0
 
 #: Reader depth for topics outside the table.
 DEFAULT_DEPTH = 100
+
+#: Period of the check for the world's writers [s] (wall time), and of its progress lines.
+WORLD_CHECK_PERIOD = 0.2
+WORLD_LOG_PERIOD = 5.0
 
 #: Least reader depth on table topics: deeper than the table's readers, so that a burst
 #: (every robot's inbox traffic of a step) is not overwritten before the executor takes it.
@@ -247,6 +258,11 @@ class Recorder(Node):
         self._steps: dict[str, set[int]] = defaultdict(set)
         self._team: dict[int, np.ndarray] = {}
         self.report: completeness.Completeness | None = None
+        #: The world's topics that must match a writer before the truth is subscribed.
+        self._world_topics: list[str] = []
+        self._truth_spec: T.TopicSpec | None = None
+        self._world_timer = None
+        self._world_since = self._world_logged = time.monotonic()
         self.log.add_metadata("phd_swarm.recorder", {
             "output": str(self.params["output"]),
             "compression": self.params["compression"],
@@ -286,10 +302,42 @@ class Recorder(Node):
         self._dt_ns = s.dt * 1e9
         self._robots = s.robots
         self._step_topics = frozenset(completeness.run_step_topics(rc))
+        wait = self.params["wait_for_world"]
         for spec in T.run_topics(range(s.robots)):
-            if self._inboxes or not _INBOX_TOPIC.match(spec.name):
+            if wait and spec.name == T.WORLD_TRUTH:
+                self._truth_spec = spec
+            elif self._inboxes or not _INBOX_TOPIC.match(spec.name):
                 self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
                                qos_yaml(publisher_qos(spec.qos)))
+                if spec.publisher == "world" and spec.name in self._subs:
+                    self._world_topics.append(spec.name)
+        if self._truth_spec is not None:
+            self._world_timer = self.create_timer(
+                WORLD_CHECK_PERIOD, self._check_world,
+                clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def _check_world(self) -> None:
+        """Subscribe to the truth once every world topic matched a writer (see above)."""
+        self._world_topics = [t for t in self._world_topics
+                              if self._subs[t].get_publisher_count() == 0]
+        now = time.monotonic()
+        if self._world_topics:
+            if now - self._world_logged >= WORLD_LOG_PERIOD:
+                self._world_logged = now
+                shown = ", ".join(self._world_topics[:4])
+                more = len(self._world_topics) - 4
+                self.get_logger().info(
+                    f"waiting for the world's writers on {len(self._world_topics)} topics "
+                    f"({shown}{f' and {more} more' if more > 0 else ''}) before subscribing "
+                    f"to {T.WORLD_TRUTH}")
+            return
+        self.destroy_timer(self._world_timer)
+        self._world_timer = None
+        spec = self._truth_spec
+        self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
+                       qos_yaml(publisher_qos(spec.qos)))
+        self.get_logger().info(f"the world's writers matched after {now - self._world_since:.1f}"
+                               f" s; recording {spec.name}")
 
     def subscribe(self, topic: str, ros_type: str, qos: QoSProfile,
                   offered_qos_yaml: str = "") -> bool:
@@ -373,8 +421,10 @@ class Recorder(Node):
         """
         if not self._step_topics:
             return None
-        return completeness.check(self._steps, self._team, self._robots,
-                                  [t for t in self._subs if t in self._step_topics])
+        topics = [t for t in self._subs if t in self._step_topics]
+        if self._truth_spec is not None and self._truth_spec.name not in self._subs:
+            topics.append(self._truth_spec.name)  # never subscribed: all of it is missing
+        return completeness.check(self._steps, self._team, self._robots, topics)
 
     def discover(self) -> None:
         """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""
@@ -409,6 +459,13 @@ class Recorder(Node):
             return
         if self._timer is not None:
             self.destroy_timer(self._timer)
+        if self._world_timer is not None:
+            self.destroy_timer(self._world_timer)
+            self._world_timer = None
+            waiting = ", ".join(self._world_topics[:4])
+            (self.get_logger() if self.context.ok() else get_logger("recorder.close")).error(
+                f"closing before the world's writers matched on {len(self._world_topics)} "
+                f"topics ({waiting}); {T.WORLD_TRUTH} was not recorded")
         drained = 0
         started = time.monotonic()
         try:

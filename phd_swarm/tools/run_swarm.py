@@ -53,6 +53,12 @@ from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 AUTO_SERVER_PROCESSES = 16
 
 #: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
+#: Log lines that say the recorder and the monitor are up (their subscriptions made), and
+#: how long the robots' start waits for them [s].
+RECORDER_UP = "recording "
+MONITOR_UP = "monitor: watching "
+OBSERVERS_UP_TIMEOUT = 60.0
+
 #: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
 AUTO_PROFILE_PROCESSES = 30
 
@@ -154,11 +160,17 @@ def _raise_interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
-def _pump(stream: IO[str], log: IO[str], echo: bool) -> None:
-    """Copy a child's output to its log; echo progress lines and errors to the terminal."""
+def _pump(stream: IO[str], log: IO[str], echo: bool, up: tuple[str, threading.Event] | None
+          ) -> None:
+    """Copy a child's output to its log; echo progress lines and errors to the terminal.
+
+    ``up``: (marker, event): the event is set at the first line holding the marker.
+    """
     for line in stream:
         log.write(line)
         log.flush()
+        if up is not None and not up[1].is_set() and up[0] in line:
+            up[1].set()
         if echo and ("steps/s" in line or line.startswith(("[ERROR]", "error:"))
                      or "world: done" in line or "waiting for the team" in line):
             print(line.rstrip().split("]: ", 1)[-1], flush=True)
@@ -174,21 +186,42 @@ class Swarm:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cpu: dict[str, float] = {}
         self._threads: list[threading.Thread] = []
+        self._up: dict[str, threading.Event] = {}
         (run_dir / "logs").mkdir(exist_ok=True)
 
     def start(self, name: str, module: str, ros_args: list[str], extra: list[str] = (),
-              echo: bool = False) -> subprocess.Popen:
-        """Start ``python -m module extra --ros-args ros_args`` as child ``name``."""
+              echo: bool = False, up_marker: str | None = None) -> subprocess.Popen:
+        """Start ``python -m module extra --ros-args ros_args`` as child ``name``.
+
+        ``up_marker``: text of the log line that says the child is up (:meth:`wait_up`).
+        """
         argv = [sys.executable, "-m", module, *extra, "--ros-args", *ros_args]
         proc = subprocess.Popen(argv, env=self.env, start_new_session=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         log = open(self.run_dir / "logs" / f"{name}.log", "w")  # noqa: SIM115 (closed by EOF)
-        t = threading.Thread(target=_pump, args=(proc.stdout, log, echo and not self.quiet),
+        up = None
+        if up_marker is not None:
+            up = (up_marker, self._up.setdefault(name, threading.Event()))
+        t = threading.Thread(target=_pump, args=(proc.stdout, log, echo and not self.quiet, up),
                              daemon=True)
         t.start()
         self._threads.append(t)
         self.procs[name] = proc
         return proc
+
+    def wait_up(self, names: list[str], timeout: float) -> list[str]:
+        """Wait until children ``names`` logged their up marker, one exited, or ``timeout``.
+
+        Returns the names that are not up.
+        """
+        deadline = time.monotonic() + timeout
+        waiting = [n for n in names if n in self._up]
+        while waiting and time.monotonic() < deadline:
+            if any(self.procs[n].poll() is not None for n in waiting):
+                break
+            self._up[waiting[0]].wait(timeout=0.1)
+            waiting = [n for n in waiting if not self._up[n].is_set()]
+        return waiting
 
     def cpu_seconds(self, name: str) -> float:
         """User + system CPU time child ``name`` has used so far [s] (0 once it is gone)."""
@@ -293,9 +326,19 @@ def run(opts: argparse.Namespace) -> int:
     previous = {sig: signal.signal(sig, _raise_interrupt)
                 for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
+        # The observers first, each up (its subscriptions made) before the robots start:
+        # with tens of processes starting at once, a recorder making its ~14 subscriptions
+        # per robot got a slice of the CPU and was up 85 s after the robots, which had
+        # given up waiting for it (50 robot processes, docs/deployment.md).
         if record:
-            swarm.start("recorder", "phd_swarm.nodes.recorder", common)
-        swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True)
+            swarm.start("recorder", "phd_swarm.nodes.recorder", common,
+                        up_marker=RECORDER_UP)
+        swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True,
+                    up_marker=MONITOR_UP)
+        late = swarm.wait_up(["recorder", "monitor"], OBSERVERS_UP_TIMEOUT)
+        if late:
+            print(f"run_swarm: {' and '.join(late)} not up after {OBSERVERS_UP_TIMEOUT:g} s; "
+                  "starting the robots anyway (see their logs)", file=sys.stderr)
         for first in range(0, s.robots, per):
             ids = list(range(first, min(first + per, s.robots)))
             if per == 1:

@@ -118,7 +118,7 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     cfg = _config(tmp_path)
     out = tmp_path / "run.mcap"
     rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
-                    compression="lz4")
+                    compression="lz4", wait_for_world=False)
     # The protocol inboxes only when asked (record_inboxes).
     assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - len(T.INBOX)
     assert not any("/inbox/" in t for t in rec.topics)
@@ -168,6 +168,37 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     (offer,) = yaml.safe_load(channels["/robot_0/status"].metadata["offered_qos_profiles"])
     assert (offer["durability"], offer["depth"]) == ("transient_local",
                                                      publisher_qos("STEP").depth)
+
+
+@pytest.mark.ros
+def test_the_truth_is_subscribed_once_every_world_writer_matched(ros, tmp_path):
+    """The world counts the recorder by its truth subscription: that comes last."""
+    from geometry_msgs.msg import PoseStamped
+
+    from phd_swarm_msgs.msg import MeasurementSet
+
+    rec = _recorder(ros, output=str(tmp_path / "run.mcap"),
+                    params_file=str(_config(tmp_path, robots=2)), discover=False)
+    assert T.WORLD_TRUTH not in rec.topics
+    world = ros.node("world")
+    types = {"rosgraph_msgs/msg/Clock": Clock, "phd_swarm_msgs/msg/TeamState": TeamState,
+             "visualization_msgs/msg/MarkerArray": MarkerArray,
+             "phd_swarm_msgs/msg/MeasurementSet": MeasurementSet,
+             "geometry_msgs/msg/PoseStamped": PoseStamped}
+    specs = [t for t in T.run_topics(range(2)) if t.publisher == "world"
+             and t.name != T.WORLD_TRUTH]
+    assert {t.name for t in specs} == {"/clock", "/world/robots", "/world/markers",
+                                       "/robot_0/measurements", "/robot_0/pose",
+                                       "/robot_1/measurements", "/robot_1/pose"}
+    last = next(t for t in specs if t.name == "/robot_1/pose")
+    pubs = [world.create_publisher(types[t.type], t.name, publisher_qos(t.qos))
+            for t in specs if t is not last]
+    _matched(ros, pubs)
+    ros.spin_until(lambda: False, timeout=1.0)
+    assert T.WORLD_TRUTH not in rec.topics, "subscribed before the last writer matched"
+    world.create_publisher(PoseStamped, last.name, publisher_qos(last.qos))
+    assert ros.spin_until(lambda: T.WORLD_TRUTH in rec.topics, timeout=20.0)
+    rec.close()
 
 
 @pytest.mark.ros
@@ -331,7 +362,8 @@ def test_completeness_names_the_missing_steps_and_is_stored_in_the_log(ros, tmp_
     """
     cfg = _config(tmp_path, robots=2)
     out = tmp_path / "run.mcap"
-    rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False)
+    rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
+                    wait_for_world=False)
     talker = ros.node("talker")
     pubs = {name: talker.create_publisher(typ, name, publisher_qos("STEP")) for name, typ in [
         (T.WORLD_ROBOTS, TeamState), (T.robot_topic(0, "status"), RobotStatus),

@@ -56,6 +56,15 @@ def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, c
 
     run = tmp_path / "a"
     summary = json.loads((run / "summary.json").read_text())
+    # The observers were up (subscriptions made) before any robot process started.
+    def first_stamp(name: str, text: str = "") -> float:
+        line = next(ln for ln in (run / "logs" / f"{name}.log").read_text().splitlines()
+                    if text in ln)
+        return float(re.search(r"\] \[(\d+\.\d+)\]", line).group(1))
+
+    robots_start = min(first_stamp(f"robot_{i}") for i in range(ROBOTS))
+    assert first_stamp("recorder", "recording ") < robots_start
+    assert first_stamp("monitor", "monitor: watching ") < robots_start
     for key in DESIGN_FIELDS:
         assert key in summary, key
     assert summary["steps"] == STEPS and summary["robots"] == ROBOTS
