@@ -59,6 +59,11 @@ RECORDER_UP = "recording "
 MONITOR_UP = "monitor: watching "
 OBSERVERS_UP_TIMEOUT = 60.0
 
+#: Start-up allowance per process [s]: the least ``ready_timeout`` of the world and the
+#: robots is this times the number of processes. 53 processes (50 robots) took ~130 s from
+#: the first robot's start to the world's step 0 on 2 cores (docs/deployment.md).
+STARTUP_S_PER_PROCESS = 3.0
+
 #: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
 AUTO_PROFILE_PROCESSES = 30
 
@@ -279,6 +284,23 @@ def _signal_group(proc: subprocess.Popen, sig: int) -> None:
         pass
 
 
+def ready_timeouts(rc: RunConfig, processes: int) -> dict[str, float]:
+    """The world's and the robots' ``ready_timeout`` for a run of ``processes`` processes.
+
+    Start-up takes longer with more processes (imports, then DDS discovery, CPU-bound on a
+    small machine): where the config leaves a ``ready_timeout`` at its default, it is at
+    least :data:`STARTUP_S_PER_PROCESS` x ``processes``, so that a large team is not given
+    up on while it is still coming up. A ``ready_timeout`` the config sets is kept.
+    """
+    allowance = STARTUP_S_PER_PROCESS * processes
+    out = {}
+    for kind in ("world", "robot"):
+        value = float(rc.param(kind, "ready_timeout"))
+        out[kind] = value if "ready_timeout" in rc.nodes.get(kind, {}) else max(value,
+                                                                                allowance)
+    return out
+
+
 def run(opts: argparse.Namespace) -> int:
     """Run the swarm described by ``opts``; returns the exit code."""
     rc = resolve(opts)
@@ -288,16 +310,17 @@ def run(opts: argparse.Namespace) -> int:
     run_dir = _fresh_dir(Path(opts.out), name)
     record = not opts.no_record
     observers = 2 if record else 1
+    per = max(1, opts.robots_per_process)
+    processes = -(-s.robots // per) + 2 + int(record)
+    ready = ready_timeouts(rc, processes)
     rc = rc.with_overrides(
-        world={"observers": observers},
-        robot={"observers": observers},
+        world={"observers": observers, "ready_timeout": ready["world"]},
+        robot={"observers": observers, "ready_timeout": ready["robot"]},
         monitor={"summary_path": str(run_dir / "summary.json"), "exit_when_done": True},
         recorder={"output": str(run_dir / "run.mcap"),
                   "params_file": str(run_dir / "config.yaml"), "discover": False,
                   "record_inboxes": bool(opts.record_inboxes)})
     params = rc.write_params(run_dir / "config.yaml")
-    per = max(1, opts.robots_per_process)
-    processes = -(-s.robots // per) + 2 + int(record)
     env = dds_env(os.environ, opts.dds == "profile" or (opts.dds == "auto"
                                                         and processes > AUTO_PROFILE_PROCESSES))
     env.setdefault("ROS_DOMAIN_ID", "42")

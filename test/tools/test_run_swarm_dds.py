@@ -8,7 +8,12 @@ from pathlib import Path
 import pytest
 
 from phd_swarm.tools.dds import DDS_PROFILE, dds_env
-from phd_swarm.tools.run_swarm import AUTO_PROFILE_PROCESSES, parse_args
+from phd_swarm.tools.run_swarm import (
+    AUTO_PROFILE_PROCESSES,
+    STARTUP_S_PER_PROCESS,
+    parse_args,
+    ready_timeouts,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,3 +61,14 @@ def test_a_missing_profile_is_refused(monkeypatch, tmp_path):
     monkeypatch.setattr(dds, "DDS_PROFILE", tmp_path / "gone.xml")
     with pytest.raises(FileNotFoundError, match="gone.xml is missing"):
         dds.dds_env({}, profile=True)
+
+
+def test_ready_timeouts_grow_with_the_processes_unless_the_config_sets_them():
+    from phd_swarm.config import load_run_config
+
+    rc = load_run_config(ROOT / "config" / "dames_static.yaml")
+    assert ready_timeouts(rc, 7) == {"world": 60.0, "robot": 60.0}    # the defaults
+    big = STARTUP_S_PER_PROCESS * 53
+    assert big > 60.0 and ready_timeouts(rc, 53) == {"world": big, "robot": big}
+    mine = rc.with_overrides(world={"ready_timeout": 4.0})
+    assert ready_timeouts(mine, 53) == {"world": 4.0, "robot": big}
