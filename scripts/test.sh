@@ -5,7 +5,9 @@
 # machine otherwise quiet, as their start-up and deadlines assume; then the rest on every
 # core with pytest-xdist (PHD_SWARM_TEST_WORKERS workers, default: one per core). It fails
 # if either fails.
-# With arguments, one pytest run with them, e.g. `scripts/test.sh test/core -k ospa`.
+# `scripts/test.sh --full` (what CI runs) then also runs the tests marked `full`: 50 robot
+# processes through run_swarm.sh (about 3 minutes).
+# With other arguments, one pytest run with them, e.g. `scripts/test.sh test/core -k ospa`.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh"
@@ -23,11 +25,18 @@ run_pytest() {
   fi
   return "$rc"
 }
-if [ $# -gt 0 ]; then
+full=0
+if [ "${1:-}" = "--full" ] && [ $# -eq 1 ]; then
+  full=1
+elif [ $# -gt 0 ]; then
   run_pytest "$@"
   exit $?
 fi
 rc=0
-run_pytest -m ros || rc=$?
-run_pytest -m "not ros" -n "${PHD_SWARM_TEST_WORKERS:-auto}" --dist worksteal || rc=$?
+run_pytest -m "ros and not full" || rc=$?
+run_pytest -m "not ros and not full" -n "${PHD_SWARM_TEST_WORKERS:-auto}" --dist worksteal \
+  || rc=$?
+if [ "$full" -eq 1 ]; then
+  run_pytest -m full --full || rc=$?
+fi
 exit "$rc"

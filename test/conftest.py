@@ -10,6 +10,21 @@ import pytest
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 
+def pytest_addoption(parser):
+    parser.addoption("--full", action="store_true",
+                     help="also run the tests marked full (the 50-process run)")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``full`` run only with ``--full`` (``scripts/test.sh --full``)."""
+    if config.getoption("--full"):
+        return
+    skip = pytest.mark.skip(reason="marked full: run with --full (scripts/test.sh --full)")
+    for item in items:
+        if "full" in item.keywords:
+            item.add_marker(skip)
+
+
 @pytest.fixture
 def ros():
     """A private rclpy context on a fresh domain id with a single-threaded executor."""
