@@ -128,25 +128,25 @@ def _pid_of(run_dir: Path, robot_id: int) -> int | None:
 @pytest.mark.ros
 @pytest.mark.slow
 def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, children):
-    steps = 40
-    proc = _start_fast(children, tmp_path, "kill", steps)
+    # A long run (2000 steps), stopped by Ctrl-C once the others have stepped on: a short
+    # one could end (at 20x real time) before the kill lands.
+    proc = _start_fast(children, tmp_path, "kill", 2000)
     run = tmp_path / "kill"
-    log = run / "logs" / "monitor.log"
-    deadline = time.monotonic() + 120.0
-    while not (log.exists() and "step 11/" in log.read_text()):
-        assert proc.poll() is None and time.monotonic() < deadline, "the run did not start"
-        time.sleep(0.2)
+    monitor, world = run / "logs" / "monitor.log", run / "logs" / "world.log"
+    _wait_for(monitor, "step 11/", proc)
     pid = _pid_of(run, 2)
     assert pid is not None
     os.kill(pid, signal.SIGKILL)
-    _finish(children, proc)
+    _wait_for(world, "robot 2 did not report", proc)
+    killed = int(re.search(r"robot 2 did not report step (\d+)", world.read_text()).group(1))
+    _wait_for_step(monitor, killed + 21, proc)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=60.0)
     summary = json.loads((run / "summary.json").read_text())
-    assert summary["steps"] == steps and summary["complete"]
-    assert 2 in summary["dead_robots"]
-    assert "robot 2 did not report" in (run / "logs" / "world.log").read_text()
+    assert summary["steps"] >= killed + 20 and summary["dead_robots"] == [2]
     metrics = [r.msg for r in read_messages(run / "run.mcap", topics=["/monitor/metrics"])]
-    assert metrics[-1].robots_reported == ROBOTS - 1
-    assert metrics[-1].step == steps - 1
+    after = [m for m in metrics if m.step > killed]
+    assert len(after) >= 20 and all(m.robots_reported == ROBOTS - 1 for m in after)
 
 
 def _pids(run_dir: Path, arg: str) -> list[int]:
