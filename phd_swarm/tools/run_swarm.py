@@ -72,7 +72,7 @@ STOP_GRACE = 6.0
 
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
 WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
-                     "cpu_s", "cpu_s_per_robot")
+                     "cpu_s", "cpu_s_per_robot", "peak_memory_mb")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -190,6 +190,8 @@ class Swarm:
         self.quiet = quiet
         self.procs: dict[str, subprocess.Popen] = {}
         self.cpu: dict[str, float] = {}
+        #: Peak resident memory of each child [MB] (VmHWM), as last read.
+        self.memory: dict[str, float] = {}
         self._threads: list[threading.Thread] = []
         self._up: dict[str, threading.Event] = {}
         (run_dir / "logs").mkdir(exist_ok=True)
@@ -237,17 +239,30 @@ class Swarm:
         utime, stime = fields.split()[11:13]
         return (int(utime) + int(stime)) / os.sysconf("SC_CLK_TCK")
 
+    def sample(self, name: str) -> None:
+        """Note child ``name``'s CPU time and peak memory so far (kept once it is gone)."""
+        self.cpu[name] = max(self.cpu.get(name, 0.0), self.cpu_seconds(name))
+        try:
+            status = Path(f"/proc/{self.procs[name].pid}/status").read_text()
+        except OSError:
+            return
+        for line in status.splitlines():
+            if line.startswith("VmHWM:"):
+                kb = float(line.split()[1])
+                self.memory[name] = max(self.memory.get(name, 0.0), kb / 1024.0)
+                return
+
     def stop(self, name: str, grace: float = 10.0) -> int | None:
         """SIGINT child ``name``'s group, SIGKILL after ``grace`` s; returns its exit code."""
         proc = self.procs[name]
-        self.cpu[name] = max(self.cpu.get(name, 0.0), self.cpu_seconds(name))
+        self.sample(name)
         return stop_process_group(proc, grace)
 
     def stop_many(self, names: list[str], grace: float) -> None:
         """SIGINT the groups of ``names`` at once; SIGKILL what still runs after ``grace`` s."""
         running = [n for n in names if n in self.procs and self.procs[n].poll() is None]
         for n in running:
-            self.cpu[n] = max(self.cpu.get(n, 0.0), self.cpu_seconds(n))
+            self.sample(n)
             _signal_group(self.procs[n], signal.SIGINT)
         deadline = time.monotonic() + grace
         for n in running:
@@ -375,7 +390,7 @@ def run(opts: argparse.Namespace) -> int:
         while world.poll() is None:
             time.sleep(0.2)
             for n in swarm.procs:
-                swarm.cpu[n] = max(swarm.cpu.get(n, 0.0), swarm.cpu_seconds(n))
+                swarm.sample(n)
             monitor = swarm.procs["monitor"]
             if monitor.poll() is not None and monitor.returncode != 0:
                 raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
@@ -423,7 +438,7 @@ def run(opts: argparse.Namespace) -> int:
         print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",
               file=sys.stderr)
         return code
-    return _report(run_dir, rc, wall, interrupted, swarm.cpu) or code
+    return _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
 
 
 def _ensure_bag_metadata(mcap: Path) -> None:
@@ -478,7 +493,7 @@ def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subproc
 
 
 def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
-            cpu: dict[str, float]) -> int:
+            cpu: dict[str, float], memory: dict[str, float]) -> int:
     path = run_dir / "summary.json"
     if not path.exists():
         print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
@@ -498,7 +513,8 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
                     "real_time_factor": (summary["sim_duration_s"] / stepping
                                          if stepping else None),
                     "cpu_s": {k: round(v, 2) for k, v in sorted(cpu.items())},
-                    "cpu_s_per_robot": robots_cpu / s.robots})
+                    "cpu_s_per_robot": robots_cpu / s.robots,
+                    "peak_memory_mb": {k: round(v, 1) for k, v in sorted(memory.items())}})
     path.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"run_swarm: {summary['steps']}/{s.steps} steps, {summary['sim_duration_s']:g} s sim "
           f"in {stepping:.1f} s wall ({summary['real_time_factor'] or 0:.2f} x real time; "

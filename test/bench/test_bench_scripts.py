@@ -164,6 +164,31 @@ def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
 
 @pytest.mark.ros
 @pytest.mark.slow
+def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "swarm", "--quick",
+                             "--out", str(tmp_path)],
+                            capture_output=True, text=True, timeout=600, check=False)
+    assert result.returncode == 0, result.stderr
+    rows = json.loads(next(tmp_path.glob("swarm-*.json")).read_text())["results"]
+    assert [(r["layout"], r["processes"]) for r in rows] == [
+        ("one process per robot", 4), ("2 robots per process", 2),
+        ("all robots in one process", 1)]
+    for r in rows:
+        assert r["robots"] == 4 and r["steps"] == 10 and r["dead_robots"] == []
+        assert r["log_complete"] is True and r["cpu_ms_per_robot_step"] > 0
+        assert 20 < r["peak_memory_mb_per_process"] < 2000
+    assert "complete" in result.stdout
+
+
+def test_bench_swarm_rejects_an_unknown_layout():
+    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "swarm", "--layouts",
+                             "processes,clusters"], capture_output=True, text=True,
+                            timeout=120, check=False)
+    assert result.returncode == 2 and "clusters" in result.stderr
+
+
+@pytest.mark.ros
+@pytest.mark.slow
 def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
     result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "discovery", "--quick",
                              "--out", str(tmp_path)],
