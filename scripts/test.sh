@@ -6,7 +6,8 @@
 # core with pytest-xdist (PHD_SWARM_TEST_WORKERS workers, default: one per core). It fails
 # if either fails.
 # `scripts/test.sh --full` (what CI runs) then also runs the tests marked `full`: 50 robot
-# processes through run_swarm.sh (about 3 minutes).
+# processes through run_swarm.sh, and the benchmarks' quick runs that start ROS runs
+# (about 5 minutes).
 # With other arguments, one pytest run with them, e.g. `scripts/test.sh test/core -k ospa`.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -64,6 +64,7 @@ def test_bench_engines_quick_compares_the_two_engines(tmp_path):
 
 @pytest.mark.ros
 @pytest.mark.slow
+@pytest.mark.full
 def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path):
     result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "recorder", "--quick",
                              "--interrupt-after", "2", "--out", str(tmp_path)],
@@ -118,6 +119,7 @@ def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
 
 @pytest.mark.ros
 @pytest.mark.slow
+@pytest.mark.full
 def test_bench_sung_quick_times_a_trial_the_gp_and_the_ros_run(tmp_path, children):
     proc = children.start([str(ROOT / "scripts" / "bench.sh"), "sung", "--quick",
                            "--out", str(tmp_path)])
@@ -134,6 +136,7 @@ def test_bench_sung_quick_times_a_trial_the_gp_and_the_ros_run(tmp_path, childre
 
 @pytest.mark.ros
 @pytest.mark.slow
+@pytest.mark.full
 def test_bench_shirsat_quick_times_the_robot_step_and_the_ros_run(tmp_path, children):
     proc = children.start([str(ROOT / "scripts" / "bench.sh"), "shirsat", "--quick",
                            "--out", str(tmp_path)])
@@ -164,6 +167,7 @@ def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
 
 @pytest.mark.ros
 @pytest.mark.slow
+@pytest.mark.full
 def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
     result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "swarm", "--quick",
                              "--out", str(tmp_path)],

@@ -24,6 +24,7 @@ STEPS = 2
 @pytest.mark.ros
 @pytest.mark.slow
 @pytest.mark.full
+@pytest.mark.timeout(900)  # start-up alone is ~2 min on 2 cores, more under load
 def test_fifty_robot_processes_are_alive_matched_and_logged(tmp_path, children):
     proc = children.start([str(ROOT / "scripts" / "run_swarm.sh"),
                            str(ROOT / "config" / "dames_static.yaml"), "--robots", str(ROBOTS),
