@@ -107,6 +107,8 @@ class WorldNode(Node):
         self._ready_logged = self._phase_since
         self._started_wall = 0.0
         self._current = -1
+        #: The dead set the last team state announced (logged when it changes).
+        self._announced_dead: set[int] = set()
 
         self.clock_pub = self.create_publisher(ClockMsg, T.CLOCK, publisher_qos("CLOCK"))
         self.truth_pub = self.create_publisher(TargetSet, T.WORLD_TRUTH, publisher_qos("STEP"))
@@ -154,6 +156,11 @@ class WorldNode(Node):
         self.clock_pub.publish(ClockMsg(clock=convert.stamp(k, self.dt)))
         if k > 0:
             self._publish_team(k)
+        if self.dead != self._announced_dead:
+            # A change of membership, once per change: the team state of step k says so.
+            self._announced_dead = set(self.dead)
+            self.get_logger().info(f"world: step {k} begins with {len(self._live())} robots; "
+                                   f"dead: {ranges(sorted(self.dead)) or 'none'}")
         ids, truth = w.truth()
         self.truth_pub.publish(convert.target_set(convert.TEAM_ID, k, ids, truth, len(ids),
                                                   self.dt, self.frame_id))
