@@ -18,9 +18,10 @@ Modes (every one on loopback, each with a ROS_DOMAIN_ID of its own):
 - ``profile``: ``SYSTEM_DEFAULT`` with the repository's Fast DDS profile
   ``config/dds/loopback_udp.xml`` (UDP on 127.0.0.1 only, 160 ports probed, no shared
   memory);
-- ``server``: ``LOCALHOST`` with a Fast DDS discovery server on 127.0.0.1
-  (``ROS_DISCOVERY_SERVER``), as ``run_swarm.sh --discovery-server on`` runs it;
-- ``server_profile``: the profile's transport with the discovery server.
+- ``server``: ``LOCALHOST`` with phd_swarm's discovery server on 127.0.0.1
+  (:mod:`phd_swarm.tools.discovery_server`, ``ROS_DISCOVERY_SERVER``);
+- ``server_profile``: the profile's transport with the discovery server, as
+  ``run_swarm.sh --discovery-server on`` runs it.
 
 Processes are stopped by PID (their process group) whatever happens. Writes
 ``bench/results/discovery-<date>.json``.
@@ -31,17 +32,19 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import signal
-import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
 
 from results_io import machine_meta, write_results
 
-from phd_swarm.tools.dds import dds_env
+from phd_swarm.tools.dds import dds_env, free_udp_port, server_env, server_profile
+from phd_swarm.tools.discovery_server import UP as SERVER_UP
 
 ROOT = Path(__file__).resolve().parents[1]
 PEER = Path(__file__).with_name("discovery_peer.py")
@@ -50,23 +53,24 @@ MODES = ("localhost", "profile", "server", "server_profile")
 BASE_DOMAIN = 150
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+def mode_env(mode: str, domain: int, work: Path) -> tuple[dict[str, str],
+                                                       tuple[list[str], dict[str, str]] | None]:
+    """The environment of a mode's processes, and the server's command and environment.
 
-
-def mode_env(mode: str, domain: int) -> tuple[dict[str, str], list[str] | None]:
-    """The environment of a mode's processes and the discovery server command (or None)."""
+    The server part is None in modes without one; its profile is written into ``work``.
+    """
     env = dds_env(os.environ, profile=mode in ("profile", "server_profile"))
     env.update(ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
     for var in ("ROS_DISCOVERY_SERVER", "ROS_STATIC_PEERS"):
         env.pop(var, None)
     server = None
     if mode in ("server", "server_profile"):
-        port = _free_port()
+        port = free_udp_port()
+        profile = work / "discovery_server.xml"
+        profile.write_text(server_profile(port))
+        server = ([sys.executable, "-m", "phd_swarm.tools.discovery_server", "--profile",
+                   str(profile), "--port", str(port)], server_env(env, profile))
         env["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{port}"
-        server = ["fast-discovery-server", "-i", "0", "-l", "127.0.0.1", "-p", str(port)]
     return env, server
 
 
@@ -77,7 +81,8 @@ def run(mode: str, n: int, duration: float, domain: int,
     With ``stop_when_matched`` the peers are stopped (SIGINT) as soon as every one of them
     has seen all ``n`` publishers, ``duration`` being only the cap.
     """
-    env, server_cmd = mode_env(mode, domain)
+    work = Path(tempfile.mkdtemp(prefix="phd_swarm_discovery_"))
+    env, server_spec = mode_env(mode, domain, work)
     procs: list[subprocess.Popen] = []
     server = None
     lines: list[list[dict]] = [[] for _ in range(n)]
@@ -92,10 +97,16 @@ def run(mode: str, n: int, duration: float, domain: int,
 
     t0 = time.time()
     try:
-        if server_cmd is not None:
-            server = subprocess.Popen(server_cmd, env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL, start_new_session=True)
-            time.sleep(1.0)
+        if server_spec is not None:
+            server = subprocess.Popen(server_spec[0], env=server_spec[1],
+                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                      text=True, start_new_session=True)
+            # Its up line (rclpy logs to stderr, merged here), so no peer starts before it.
+            for line in server.stdout:
+                if SERVER_UP in line:
+                    break
+            else:
+                raise RuntimeError(f"the discovery server exited ({server.wait()})")
         t0 = time.time()
         threads = []
         for i in range(n):
@@ -135,6 +146,7 @@ def run(mode: str, n: int, duration: float, domain: int,
                 except ProcessLookupError:
                     pass
                 p.wait()
+        shutil.rmtree(work, ignore_errors=True)
     matched_at = []
     for reports in lines:
         hit = [r["t"] - t0 for r in reports if r["publishers"] >= n]

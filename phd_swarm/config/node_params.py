@@ -87,7 +87,7 @@ RECORDER = (
               "gives the topics to subscribe at start, its text is stored as MCAP metadata."),
     ParamSpec("discover", True, "Also poll the ROS graph and record new phd_swarm topics "
               "(/clock, /world/*, /monitor/*, /robot_*/*) as they appear."),
-    ParamSpec("record_inboxes", False, "Also record the protocol traffic (/robot_*/inbox/*): "
+    ParamSpec("record_inboxes", False, "Also record the protocol traffic (/robot_*/inbox): "
               "~90 % of a run's messages, not needed to re-evaluate or replay the results."),
     ParamSpec("wait_for_world", True, "With params_file: subscribe to /world/truth (which the "
               "world counts to start step 0) only once every other topic the world writes "

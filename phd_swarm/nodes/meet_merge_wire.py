@@ -1,8 +1,8 @@
 """The wire format of the ``meet_merge`` exchange: one inbox kind, ``rewards``.
 
-A robot's reward set travels to each robot it meets as a ``phd_swarm_msgs/RewardSet`` on
-``/robot_<dst>/inbox/rewards`` (:mod:`phd_swarm.core.exchange.meet_merge`); the same type
-carries the robot's own set of the step on ``reward_set`` (:mod:`.robot_outputs`).
+A robot's reward set travels to each robot it meets as a ``phd_swarm_msgs/RewardSet`` of
+kind ``rewards`` in its inbox message (:mod:`phd_swarm.core.exchange.meet_merge`); the same
+type carries the robot's own set of the step on ``reward_set`` (:mod:`.robot_outputs`).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Writers and readers of a topic may keep different history depths (depth does not
 compatibility): a transient-local writer keeps a short history for late joiners, a reader a
 deep queue so that a burst is never overwritten before the executor takes it.
 
-- ``INBOX`` (protocol traffic, /robot_<i>/inbox/*): reliable, transient-local. A robot
+- ``INBOX`` (protocol traffic, /robot_<i>/inbox): reliable, transient-local. A robot
   creates its publisher to a new contact's inbox when it first needs it and writes at once;
   the transient-local history delivers that message when the two match. Every message
   matters for equality with the centralised filter.
@@ -53,7 +53,8 @@ def _keep_all(durability: DurabilityPolicy) -> QoSProfile:
 
 PROTOCOL = _profile(1000, DurabilityPolicy.VOLATILE)
 
-INBOX_PUB = _profile(16, DurabilityPolicy.TRANSIENT_LOCAL)
+#: 64: one inbox topic carries every kind (Dames' six) to a contact; it was 16 per kind.
+INBOX_PUB = _profile(64, DurabilityPolicy.TRANSIENT_LOCAL)
 INBOX_SUB = _profile(1000, DurabilityPolicy.TRANSIENT_LOCAL)
 
 STEP_PUB = _keep_all(DurabilityPolicy.TRANSIENT_LOCAL)

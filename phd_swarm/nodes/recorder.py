@@ -17,7 +17,7 @@ Topics
     cannot begin before every world writer reaches the log (at 50 robot processes the
     recorder matched the world's last writers late, or not at all, while the run went on).
     The protocol inboxes
-    (``/robot_<n>/inbox/*``, ~90 % of a run's messages) only with ``record_inboxes``. With
+    (``/robot_<n>/inbox``, most of a run's messages) only with ``record_inboxes``. With
     ``discover`` on, it also polls the graph every 0.5 s (wall time) and subscribes to new
     topics under ``/clock``, ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table
     QoS if the topic is in the table (robot topics match by their relative name) and its
@@ -113,7 +113,7 @@ WORLD_LOG_PERIOD = 5.0
 MIN_TABLE_DEPTH = 1000
 
 _ROBOT_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/(.+)$")
-_INBOX_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/inbox/")
+_INBOX_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/inbox$")
 _U32_LE = struct.Struct("<I")
 _U32_BE = struct.Struct(">I")
 _STAMP_TYPES = ("std_msgs/Header", "builtin_interfaces/Time")

@@ -12,7 +12,7 @@ window and a cell, or Gaussian components, tracks and markers). Per step k:
 
 1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
    q^k): the step starts, and the protocol's messages go to the contacts' inboxes
-   (``/robot_<j>/inbox/<kind>``, :mod:`phd_swarm.nodes.topics`);
+   (``/robot_<j>/inbox``, one message per contact and tick: :mod:`phd_swarm.nodes.inbox`);
 2. messages arrive on the own inbox, are checked (:mod:`phd_swarm.nodes.convert`, plus known
    sender, right address, step in range) and fed to the protocol; bad ones are dropped with
    a logged reason and counted (``rejected_messages`` in the status);
@@ -78,13 +78,17 @@ from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
 from phd_swarm.core.exchange.voronoi_phd.messages import Message
 from phd_swarm.core.exchange.voronoi_phd.participant import ProtocolError
 from phd_swarm.core.scan import Scan
-from phd_swarm.nodes import convert
+from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.robot_outputs import RobotOutputs
 from phd_swarm.nodes.wire import wire_for
-from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TeamState
+from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotStatus, TeamState
+
+#: Wall seconds between a waiting robot's log lines of what it waits for before READY.
+READY_LOG_PERIOD = 20.0
 
 #: Wall seconds without any executor callback after which a robot stops saying it is alive.
 HUNG_AFTER = 30.0
@@ -139,7 +143,8 @@ class RobotNode(Node):
         self._sent = 0
         self._received: dict[int, int] = defaultdict(int)
         self._started = time.monotonic()
-        self._peer_pubs: dict[tuple[int, str], object] = {}
+        self._ready_logged = self._started
+        self._peer_pubs: dict[int, object] = {}
         self._finished = -1
         self._finished_at = time.monotonic()
         #: The world's team states by step: (ids, positions (R, 2), alive flags).
@@ -166,8 +171,8 @@ class RobotNode(Node):
         self.outputs = RobotOutputs(self, self.agent, self.params["publish_density"])
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
                                  subscription_qos("STEP"))
-        for kind, typ in self.wire.types.items():
-            self.create_subscription(typ, f"inbox/{kind}", self._make_inbox_callback(kind),
+        if self.wire.types:
+            self.create_subscription(InboxMessage, inbox.INBOX, self._on_envelope,
                                      subscription_qos("INBOX"))
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
@@ -224,23 +229,27 @@ class RobotNode(Node):
         Discovery and matching of a new publisher take a while (much longer with many
         processes); doing it between steps keeps it off the step's critical path.
         """
+        if not self.wire.types:
+            return
         for c in getattr(self.filter, "contacts", ()):
-            for kind in self.wire.types:
-                self._peer_publisher(c, kind)
+            self._peer_publisher(c)
 
     def _check_ready(self) -> None:
         if self.ready or not self.initialised:
             return
-        need = self.params["observers"]
-        matched = (self.status_pub.get_subscription_count() >= 1 + need
-                   and self.outputs.matched(need)
-                   and all(p.get_subscription_count() >= 1 for p in self._peer_pubs.values()))
-        waited = time.monotonic() - self._started
-        if not matched and waited < self.params["ready_timeout"]:
+        unmatched = self._unmatched()
+        now = time.monotonic()
+        waited = now - self._started
+        if unmatched and waited < self.params["ready_timeout"]:
+            if now - self._ready_logged >= READY_LOG_PERIOD:
+                self._ready_logged = now
+                self.get_logger().info(f"robot {self.robot_id}: waiting {waited:.0f} s for "
+                                       f"{unmatched}")
             return
-        if not matched:
-            self.get_logger().error(f"robot {self.robot_id}: observers did not match within "
-                                    f"{self.params['ready_timeout']} s; going on without them")
+        if unmatched:
+            self.get_logger().error(f"robot {self.robot_id}: not matched within "
+                                    f"{self.params['ready_timeout']} s ({unmatched}); going on "
+                                    "without them")
         latest = max(self.teams, default=0)
         if latest > 0 and not self.evicted:
             # The run is under way (the team states' history came in): this process was
@@ -254,6 +263,25 @@ class RobotNode(Node):
                                             state=RobotStatus.STATE_READY,
                                             robot_id=self.robot_id))
         self._start_pending()
+
+    def _unmatched(self) -> str:
+        """What has not matched yet, in words; "" once all have their readers.
+
+        The status needs the world and the observers, the density window the observers, and
+        each contact's inbox its robot.
+        """
+        need = self.params["observers"]
+        missing = []
+        status = self.status_pub.get_subscription_count()
+        if status < 1 + need:
+            missing.append(f"status: {status} of {1 + need} readers (world and observers)")
+        if not self.outputs.matched(need):
+            missing.append(f"density: fewer than {need} observers")
+        peers = sorted(dst for dst, pub in self._peer_pubs.items()
+                       if pub.get_subscription_count() < 1)
+        if peers:
+            missing.append(f"inboxes of robots {ranges(peers)}")
+        return "; ".join(missing)
 
     # -------------------------------------------------------------------- steps
     def _on_scan(self, msg: MeasurementSet) -> None:
@@ -310,18 +338,26 @@ class RobotNode(Node):
         for old in [k for k in self.teams if k < step - 1]:
             del self.teams[old]
 
-    def _make_inbox_callback(self, kind: str):
-        def callback(msg) -> None:
-            self._on_inbox(kind, msg)
-        return callback
-
-    def _on_inbox(self, kind: str, ros_msg) -> None:
+    def _on_envelope(self, envelope: InboxMessage) -> None:
+        """Take the protocol messages of one envelope in the order they were sent."""
         self._alive_at = time.monotonic()
+        try:
+            messages = inbox.unpack(envelope, self.wire.types)
+        except convert.InvalidMessage as exc:
+            self._reject("envelope", f"inbox message from robot {envelope.sender}: {exc}")
+            return
+        for kind, ros_msg in messages:
+            self._on_inbox(kind, ros_msg, envelope.sender)
+
+    def _on_inbox(self, kind: str, ros_msg, sender: int) -> None:
         try:
             msg = self.wire.from_ros(ros_msg, self.grid, self.params["max_measurements"])
             self._check_welcome(msg)
+            if self.wire.sender(msg) != sender:
+                raise convert.InvalidMessage(f"sent by robot {self.wire.sender(msg)} inside "
+                                             f"robot {sender}'s inbox message")
         except convert.InvalidMessage as exc:
-            self._reject(kind, f"inbox/{kind}: {exc}")
+            self._reject(kind, f"inbox {kind}: {exc}")
             return
         self._received[msg.step] += 1
         if self.evicted:
@@ -439,14 +475,18 @@ class RobotNode(Node):
     def _send(self, envelopes: list[Envelope]) -> None:
         """Publish envelopes to their receivers' inboxes, through the (faulty) link."""
         now, later = self.link.route(envelopes)
-        for env in now:
-            self._publish(env)
+        self._publish(now)
         self._held.extend([rounds, env] for rounds, env in later)
         self._sent += len(envelopes)
 
-    def _publish(self, env: Envelope) -> None:
-        pub = self._peer_publisher(env.dst, self.wire.kind(env.msg))
-        pub.publish(self.wire.to_ros(env.msg, self.dt, self.frame_id))
+    def _publish(self, envelopes: list[Envelope]) -> None:
+        """One inbox message per receiver, holding its envelopes in order."""
+        by_dst: dict[int, list] = {}
+        for env in envelopes:
+            by_dst.setdefault(env.dst, []).append(
+                (self.wire.kind(env.msg), self.wire.to_ros(env.msg, self.dt, self.frame_id)))
+        for dst, messages in by_dst.items():
+            self._peer_publisher(dst).publish(inbox.pack(self.robot_id, messages))
 
     def _release_held(self) -> None:
         """One tick period passed: publish the delayed envelopes that are due."""
@@ -458,16 +498,14 @@ class RobotNode(Node):
             if entry[0] <= 0:
                 due.append(entry[1])
         self._held = [e for e in self._held if e[0] > 0]
-        for env in due:
-            self._publish(env)
+        self._publish(due)
 
-    def _peer_publisher(self, dst: int, kind: str):
-        pub = self._peer_pubs.get((dst, kind))
+    def _peer_publisher(self, dst: int):
+        pub = self._peer_pubs.get(dst)
         if pub is None:
-            pub = self.create_publisher(self.wire.types[kind],
-                                        T.robot_topic(dst, f"inbox/{kind}"),
+            pub = self.create_publisher(InboxMessage, T.robot_topic(dst, inbox.INBOX),
                                         publisher_qos("INBOX"))
-            self._peer_pubs[(dst, kind)] = pub
+            self._peer_pubs[dst] = pub
         return pub
 
     def _reject(self, kind: str, reason: str) -> None:

@@ -2,8 +2,8 @@
 
 An agent's state of a step (:class:`phd_swarm.core.exchange.sat_share.SatMsg`: position,
 mode, predicted targets, search map by the event rule, joint-plan members) travels to each
-agent in radio range as a ``phd_swarm_msgs/SatState`` on ``/robot_<dst>/inbox/sat``; the
-same type carries the agent's own state of the step on ``sat_state`` (:mod:`.robot_outputs`).
+agent in radio range as a ``phd_swarm_msgs/SatState`` of kind ``sat`` in its inbox message;
+the same type carries the agent's own state of the step on ``sat_state`` (:mod:`.robot_outputs`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ MAX_NODES = 1_000_000
 
 
 def sat_state(msg: SatMsg, dt: float, frame_id: str) -> SatState:
-    """A ``SatState`` of ``msg`` (what travels on inbox/sat, and the agent's own sat_state)."""
+    """A ``SatState`` of ``msg`` (inbox kind ``sat``, and the agent's own sat_state)."""
     return SatState(header=header(msg.step, dt, frame_id), source_id=int(msg.src),
                     step=int(msg.step), position=points(msg.position)[0],
                     tracking=bool(msg.tracking), predicted=points(msg.predicted),

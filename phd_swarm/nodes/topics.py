@@ -5,11 +5,12 @@ under its namespace ``/robot_<id>`` (REP 144, DESIGN.md). Robot nodes use relati
 inside their namespace; :func:`robot_topic` gives the absolute name for robot ``id`` (the
 world, the monitor, the recorder and peers address a robot's topics that way).
 
-Protocol traffic goes to the receiver's *inbox*: robot ``j`` publishes a message addressed
-to robot ``i`` on ``/robot_<i>/inbox/<kind>``, so a robot subscribes to its exchange's inbox
-kinds (six for Dames', ``rewards`` for Shirsat & Berman's meet-and-merge, ``sat`` for
-Papaioannou et al.'s agents) whatever the team size and receives exactly the messages
-addressed to it (O(neighbours) per step). Inbox topics are reliable and transient-local on
+Protocol traffic goes to the receiver's *inbox*: robot ``j`` publishes what it has for
+robot ``i`` in a tick as one ``InboxMessage`` on ``/robot_<i>/inbox``, whatever the kinds
+(six for Dames', ``rewards`` for Shirsat & Berman's meet-and-merge, ``sat`` for Papaioannou
+et al.'s agents; :mod:`phd_swarm.nodes.inbox`). A robot subscribes to its one inbox
+whatever the team size and receives exactly the messages addressed to it (O(neighbours)
+per step). Inbox topics are reliable and transient-local on
 the writer side with a short history, so that a message written by a publisher created a
 moment ago (a new contact) still reaches the inbox
 once the two match; readers keep a deep queue so a burst is never overwritten.
@@ -34,7 +35,7 @@ MONITOR_ESTIMATES = "/monitor/estimates"
 MONITOR_DENSITY = "/monitor/density"
 MONITOR_MARKERS = "/monitor/markers"
 
-#: Inbox kinds and the message type each carries.
+#: Inbox kinds and the message type each carries inside an InboxMessage.
 INBOX = {
     "state": "phd_swarm_msgs/msg/RobotState",
     "cell": "phd_swarm_msgs/msg/CellPolygon",
@@ -68,7 +69,7 @@ def robot_namespace(robot_id: int) -> str:
 
 
 def robot_topic(robot_id: int, relative: str) -> str:
-    """Absolute name of robot ``robot_id``'s topic ``relative`` (e.g. ``inbox/state``)."""
+    """Absolute name of robot ``robot_id``'s topic ``relative`` (e.g. ``inbox``)."""
     return f"{robot_namespace(robot_id)}/{relative}"
 
 
@@ -97,8 +98,8 @@ ROBOT_TOPICS = {
                   "once per step (search-and-track controllers)"),
     "plan": ("nav_msgs/msg/Path", "STEP", "robot",
              "once per step (search-and-track controllers)"),
-    **{f"inbox/{kind}": (typ, "INBOX", "peers", "per protocol step, from contacts")
-       for kind, typ in INBOX.items()},
+    "inbox": ("phd_swarm_msgs/msg/InboxMessage", "INBOX", "peers",
+              "per tick with protocol traffic, one per contact"),
 }
 
 #: Team-wide topics: (type, QoS, writer, rate).

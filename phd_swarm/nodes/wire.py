@@ -1,8 +1,9 @@
 """What an exchange's messages look like on ROS topics: inbox kinds, types, conversions.
 
-The robot node (:mod:`phd_swarm.nodes.robot`) publishes every envelope an exchange returns to
-the receiver's inbox topic ``/robot_<dst>/inbox/<kind>`` and feeds what arrives on its own
-inboxes back to the exchange. How a core message becomes a ROS message is the exchange's
+The robot node (:mod:`phd_swarm.nodes.robot`) publishes the envelopes an exchange returns to
+the receiver's inbox topic ``/robot_<dst>/inbox``, packed per receiver and tick with their
+kinds (:mod:`phd_swarm.nodes.inbox`), and feeds what arrives on its own inbox back to the
+exchange. How a core message becomes a ROS message is the exchange's
 business, so each exchange part names its :class:`Wire` in its registration
 (``wire="module:NAME"``, :mod:`phd_swarm.core.registry`): a string, so the core stays free
 of rclpy. A new exchange brings its message definitions (``msg_defs/``) and a wire module;
@@ -26,7 +27,7 @@ class Wire:
     Attributes
     ----------
     types : mapping of str to type
-        Inbox kind -> ROS message type (one ``inbox/<kind>`` topic per kind).
+        Inbox kind -> ROS message type (the type of that kind's messages in an inbox message).
     kind : callable
         Core message -> its inbox kind.
     to_ros : callable

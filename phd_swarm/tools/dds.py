@@ -38,3 +38,75 @@ def dds_env(base: Mapping[str, str], profile: bool) -> dict[str, str]:
             if env.get(var) == str(DDS_PROFILE):
                 del env[var]
     return env
+
+
+#: GUID prefix of discovery server 0 (Fast DDS's default for server id 0, the one
+#: ``ROS_DISCOVERY_SERVER=127.0.0.1:PORT`` names).
+SERVER_PREFIX = "44.53.00.5f.45.50.52.4f.53.49.4d.41"
+
+#: Variables that make a participant a client of a server, or a super client.
+CLIENT_VARS = ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT")
+
+
+def server_profile(port: int) -> str:
+    """A Fast DDS profile: the default participant is discovery server 0 on 127.0.0.1:port.
+
+    Its UDP transport is bound to 127.0.0.1 only, as :data:`DDS_PROFILE`'s is.
+
+    ``fast-discovery-server`` adds transports of its own that bind every interface (seen on
+    this machine: 0.0.0.0 and the host's address even with ``-l 127.0.0.1`` and ``-x``), so
+    phd_swarm runs its server as an rclpy process with this profile instead
+    (:mod:`phd_swarm.tools.discovery_server`).
+    """
+    if not 0 < port < 65536:
+        raise ValueError(f"discovery server port {port} is not a UDP port")
+    return f"""<?xml version="1.0" encoding="UTF-8" ?>
+<!-- Written by phd_swarm (phd_swarm/tools/dds.py): discovery server 0 on 127.0.0.1:{port}. -->
+<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <profiles>
+    <transport_descriptors>
+      <transport_descriptor>
+        <transport_id>phd_swarm_server_udp</transport_id>
+        <type>UDPv4</type>
+        <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+        <sendBufferSize>4194304</sendBufferSize>
+        <receiveBufferSize>4194304</receiveBufferSize>
+      </transport_descriptor>
+    </transport_descriptors>
+    <participant profile_name="phd_swarm_discovery_server" is_default_profile="true">
+      <rtps>
+        <prefix>{SERVER_PREFIX}</prefix>
+        <useBuiltinTransports>false</useBuiltinTransports>
+        <userTransports><transport_id>phd_swarm_server_udp</transport_id></userTransports>
+        <builtin>
+          <discovery_config><discoveryProtocol>SERVER</discoveryProtocol></discovery_config>
+          <metatrafficUnicastLocatorList>
+            <locator><udpv4><address>127.0.0.1</address><port>{port}</port></udpv4></locator>
+          </metatrafficUnicastLocatorList>
+        </builtin>
+        <defaultUnicastLocatorList>
+          <locator><udpv4><address>127.0.0.1</address></udpv4></locator>
+        </defaultUnicastLocatorList>
+      </rtps>
+    </participant>
+  </profiles>
+</dds>
+"""
+
+
+def server_env(base: Mapping[str, str], profile: Path) -> dict[str, str]:
+    """``base`` for the discovery server process: its own profile, and not a client."""
+    env = {k: v for k, v in base.items() if k not in CLIENT_VARS}
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
+    env["FASTRTPS_DEFAULT_PROFILES_FILE"] = str(profile)
+    env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(profile)
+    return env
+
+
+def free_udp_port() -> int:
+    """A UDP port on 127.0.0.1 that nothing holds right now."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]

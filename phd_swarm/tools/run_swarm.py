@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -45,14 +44,21 @@ from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
-from phd_swarm.tools.dds import DDS_PROFILE, dds_env
+from phd_swarm.tools.dds import (
+    CLIENT_VARS,
+    DDS_PROFILE,
+    dds_env,
+    free_udp_port,
+    server_env,
+    server_profile,
+)
+from phd_swarm.tools.discovery_server import UP as SERVER_UP
 from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 
 #: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
 #: simple discovery among ~40 processes on 2 cores lost matches).
 AUTO_SERVER_PROCESSES = 16
 
-#: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
 #: Log lines that say the recorder and the monitor are up (their subscriptions made), and
 #: how long the robots' start waits for them [s].
 RECORDER_UP = "recording "
@@ -64,8 +70,20 @@ OBSERVERS_UP_TIMEOUT = 60.0
 #: the first robot's start to the world's step 0 on 2 cores (docs/deployment.md).
 STARTUP_S_PER_PROCESS = 3.0
 
+#: Default niceness of the robot processes (``--robot-nice``). A higher one gives the world,
+#: monitor and recorder, which talk to every robot, the CPU first: on one core, 50 robot
+#: processes at fair shares left the recorder's discovery thread ~1 % of it, its receive
+#: socket overflowed and it never matched the world; niced robots let it match in 16 s. On
+#: 2 cores the same niceness slowed the robots' step 0 until peers timed out, so it is off
+#: by default (docs/deployment.md, "Start-up of a large team").
+ROBOT_NICE = 0
+
+#: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
 #: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
 AUTO_PROFILE_PROCESSES = 30
+
+#: How long run_swarm waits for its discovery server's up line [s].
+SERVER_UP_TIMEOUT = 60.0
 
 #: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
 STOP_GRACE = 6.0
@@ -93,6 +111,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                                                            "lockstep")
     p.add_argument("--robots-per-process", type=int, default=1, metavar="P",
                    help="host P robot nodes per process (default 1)")
+    p.add_argument("--robot-nice", type=int, default=ROBOT_NICE, metavar="N",
+                   help=f"niceness of the robot processes (default {ROBOT_NICE}): a higher "
+                        "one gives the world, monitor and recorder, which talk to every "
+                        "robot, the CPU first (docs/deployment.md)")
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="off",
                    help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
                         f"{AUTO_SERVER_PROCESSES} processes)")
@@ -111,7 +133,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--fault-seed", type=int, metavar="S", help="seed of the fault draws")
     p.add_argument("--no-record", action="store_true", help="do not write run.mcap")
     p.add_argument("--record-inboxes", action="store_true",
-                   help="also record the protocol traffic (/robot_*/inbox/*) in run.mcap")
+                   help="also record the protocol traffic (/robot_*/inbox) in run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     return p.parse_args(argv)
 
@@ -197,14 +219,21 @@ class Swarm:
         (run_dir / "logs").mkdir(exist_ok=True)
 
     def start(self, name: str, module: str, ros_args: list[str], extra: list[str] = (),
-              echo: bool = False, up_marker: str | None = None) -> subprocess.Popen:
+              echo: bool = False, up_marker: str | None = None, nice: int = 0,
+              env: dict[str, str] | None = None) -> subprocess.Popen:
         """Start ``python -m module extra --ros-args ros_args`` as child ``name``.
 
         ``up_marker``: text of the log line that says the child is up (:meth:`wait_up`).
+        ``nice``: the child's niceness (:func:`lower_priority`). ``env``: variables added to
+        the run's environment for this child.
         """
         argv = [sys.executable, "-m", module, *extra, "--ros-args", *ros_args]
-        proc = subprocess.Popen(argv, env=self.env, start_new_session=True,
+        if nice:
+            argv = ["nice", "-n", str(nice), *argv]
+        proc = subprocess.Popen(argv, env={**self.env, **(env or {})}, start_new_session=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if nice:
+            lower_priority(proc.pid, nice)
         log = open(self.run_dir / "logs" / f"{name}.log", "w")  # noqa: SIM115 (closed by EOF)
         up = None
         if up_marker is not None:
@@ -292,6 +321,22 @@ class Swarm:
                 if n.startswith(prefix) and p.poll() is not None}
 
 
+def lower_priority(pid: int, nice: int) -> None:
+    """Give process ``pid`` (started by ``nice -n nice``) the same niceness against others.
+
+    Each child runs in a session of its own, and with autogroup scheduling (Linux's default
+    on desktops and on this machine: /proc/sys/kernel/sched_autogroup_enabled) a session's
+    processes share one scheduling group: the CPU is split between sessions first, and a
+    process's own niceness only counts inside its session. The session's group has a
+    niceness of its own, /proc/PID/autogroup, which an unprivileged user may raise. Without
+    autogroup the file is missing and ``nice -n`` alone does it.
+    """
+    try:
+        Path(f"/proc/{pid}/autogroup").write_text(f"{nice}\n")
+    except OSError:
+        pass
+
+
 def _signal_group(proc: subprocess.Popen, sig: int) -> None:
     try:
         os.killpg(proc.pid, sig)
@@ -336,17 +381,24 @@ def run(opts: argparse.Namespace) -> int:
                   "params_file": str(run_dir / "config.yaml"), "discover": False,
                   "record_inboxes": bool(opts.record_inboxes)})
     params = rc.write_params(run_dir / "config.yaml")
-    env = dds_env(os.environ, opts.dds == "profile" or (opts.dds == "auto"
-                                                        and processes > AUTO_PROFILE_PROCESSES))
+    use_server = opts.discovery_server == "on" or (opts.discovery_server == "auto"
+                                                   and processes > AUTO_SERVER_PROCESSES)
+    # The server's clients use the profile's transport too: UDP bound to 127.0.0.1.
+    env = dds_env(os.environ, use_server or opts.dds == "profile"
+                  or (opts.dds == "auto" and processes > AUTO_PROFILE_PROCESSES))
     env.setdefault("ROS_DOMAIN_ID", "42")
     env["PYTHONUNBUFFERED"] = "1"
+    for var in CLIENT_VARS:
+        env.pop(var, None)
     common = ["--params-file", str(params)]
     server = None
-    if opts.discovery_server == "on" or (opts.discovery_server == "auto"
-                                         and processes > AUTO_SERVER_PROCESSES):
+    if use_server:
         server, address = _start_discovery_server(run_dir, env)
+        # Plain clients: each learns only the endpoints on its own topics. A super client
+        # (ROS_SUPER_CLIENT) learns everything, which is what made the server do worse than
+        # simple discovery in the first slice of issue 21; only the recorder's ``discover``
+        # mode, which polls the whole graph, needs it.
         env["ROS_DISCOVERY_SERVER"] = address
-        env["ROS_SUPER_CLIENT"] = "TRUE"
     print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
           f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed {s.seed}, "
           f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
@@ -370,7 +422,9 @@ def run(opts: argparse.Namespace) -> int:
         # given up waiting for it (50 robot processes, docs/deployment.md).
         if record:
             swarm.start("recorder", "phd_swarm.nodes.recorder", common,
-                        up_marker=RECORDER_UP)
+                        up_marker=RECORDER_UP,
+                        env={"ROS_SUPER_CLIENT": "TRUE"}
+                        if server and rc.param("recorder", "discover") else None)
         swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True,
                     up_marker=MONITOR_UP)
         late = swarm.wait_up(["recorder", "monitor"], OBSERVERS_UP_TIMEOUT)
@@ -382,10 +436,11 @@ def run(opts: argparse.Namespace) -> int:
             if per == 1:
                 swarm.start(f"robot_{first}", "phd_swarm.nodes.robot",
                             [*common, "-r", f"__ns:={robot_namespace(first)}",
-                             "-p", f"robot_id:={first}"])
+                             "-p", f"robot_id:={first}"], nice=opts.robot_nice)
             else:
                 swarm.start(f"robots_{ids[0]}-{ids[-1]}", "phd_swarm.nodes.team",
-                            common, extra=["--ids", f"{ids[0]}-{ids[-1]}"])
+                            common, extra=["--ids", f"{ids[0]}-{ids[-1]}"],
+                            nice=opts.robot_nice)
         world = swarm.start("world", "phd_swarm.nodes.world", common, echo=True)
         while world.poll() is None:
             time.sleep(0.2)
@@ -427,11 +482,7 @@ def run(opts: argparse.Namespace) -> int:
                 swarm.stop_many(["recorder"], grace=30.0)
             swarm.stop_all()
         if server is not None:
-            server.terminate()
-            try:
-                server.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                server.kill()
+            stop_process_group(server, 5.0)
     wall = time.monotonic() - started
     _ensure_bag_metadata(run_dir / "run.mcap")
     if code == EXIT_NOT_READY:
@@ -471,26 +522,30 @@ def log_completeness(mcap: Path) -> Completeness | None:
 
 def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,
                                                                           str]:
-    """Start ``fast-discovery-server`` on a free loopback port; returns it and its address."""
-    import socket
+    """Start phd_swarm's discovery server on a free loopback port; returns it and its address.
 
-    tool = shutil.which("fast-discovery-server", path=env.get("PATH"))
-    if tool is None:
-        raise ValueError("--discovery-server: fast-discovery-server is not on PATH "
-                         "(source scripts/env.sh)")
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    (run_dir / "logs").mkdir(exist_ok=True)
-    log = open(run_dir / "logs" / "discovery_server.log", "w")  # noqa: SIM115
-    proc = subprocess.Popen([tool, "-i", "0", "-l", "127.0.0.1", "-p", str(port)], env=env,
-                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-    time.sleep(0.5)
-    if proc.poll() is not None:
-        raise ValueError(f"the discovery server exited with code {proc.returncode}; see "
-                         f"{run_dir}/logs/discovery_server.log")
+    It waits (at most :data:`SERVER_UP_TIMEOUT` s) for the server's up line, so that no
+    client starts before the server listens.
+    """
+    port = free_udp_port()
+    profile = run_dir / "discovery_server.xml"
+    profile.write_text(server_profile(port))
+    log_path = run_dir / "logs" / "discovery_server.log"
+    log_path.parent.mkdir(exist_ok=True)
+    log = open(log_path, "w")  # noqa: SIM115 (the child holds it)
+    proc = subprocess.Popen([sys.executable, "-m", "phd_swarm.tools.discovery_server",
+                             "--profile", str(profile), "--port", str(port)],
+                            env=server_env(env, profile), stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    log.close()
+    deadline = time.monotonic() + SERVER_UP_TIMEOUT
+    while SERVER_UP not in log_path.read_text():
+        if proc.poll() is not None or time.monotonic() > deadline:
+            stop_process_group(proc, 2.0)
+            raise RuntimeError(f"the discovery server did not come up (exit code "
+                               f"{proc.returncode}); see {log_path}")
+        time.sleep(0.05)
     return proc, f"127.0.0.1:{port}"
-
 
 def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
             cpu: dict[str, float], memory: dict[str, float]) -> int:

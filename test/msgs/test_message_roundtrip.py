@@ -16,6 +16,7 @@ from phd_swarm_msgs.msg import (
     EtaPartial,
     EtaTotal,
     GaussianMixture,
+    InboxMessage,
     MeasurementSet,
     ParticleTransfer,
     RewardSet,
@@ -86,6 +87,8 @@ EXAMPLES = [
     SatState(header=_header(17), source_id=2, step=17, position=_points(1, 3.0)[0],
              tracking=True, predicted=_points(2, 4.5), search=[0.0, 0.5, 1.0],
              plan_members=[0, 2]),
+    InboxMessage(sender=3, kinds=["state", "cell"], offsets=[0, 4, 9],
+                 data=[0, 1, 0, 0, 7, 0, 1, 0, 0]),
 ]
 
 

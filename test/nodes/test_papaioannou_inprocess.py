@@ -1,7 +1,7 @@
 """Papaioannou et al.'s system as ROS nodes in one process, lockstep, against the engine.
 
 Four agents search and track with a particle PHD and a search map each and exchange their
-state over ``inbox/sat`` with the agents in range: every agent's estimates and goals, its
+state (inbox kind ``sat``) with the agents in range: every agent's estimates and goals, its
 search maps, modes and joint-plan agents, the messages sent and the monitor's OSPA equal
 the in-memory engine's bit for bit.
 """

@@ -8,10 +8,10 @@ import pytest
 from geometry_msgs.msg import Point
 from rclpy.parameter import Parameter
 
-from phd_swarm.nodes import convert
+from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes.qos import publisher_qos
 from phd_swarm.testing import small_static_scenario, start_swarm
-from phd_swarm_msgs.msg import MeasurementSet, ParticleTransfer, RobotState
+from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, ParticleTransfer, RobotState
 
 
 def _state(robot_id: int, step: int, x: float = 10.0) -> RobotState:
@@ -29,32 +29,39 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
         victim = robots[1]
         ros.spin_until(lambda: victim.filter.step >= 2, timeout=60.0)
         evil = ros.node("evil")
-        state = evil.create_publisher(RobotState, "/robot_1/inbox/state", publisher_qos("INBOX"))
-        meas = evil.create_publisher(MeasurementSet, "/robot_1/inbox/measurements",
-                                     publisher_qos("INBOX"))
-        parts = evil.create_publisher(ParticleTransfer, "/robot_1/inbox/particles",
-                                      publisher_qos("INBOX"))
-        ros.spin_until(lambda: state.get_subscription_count() > 0
-                       and meas.get_subscription_count() > 0
-                       and parts.get_subscription_count() > 0, timeout=10.0)
+        pub = evil.create_publisher(InboxMessage, "/robot_1/inbox", publisher_qos("INBOX"))
+        ros.spin_until(lambda: pub.get_subscription_count() > 0, timeout=10.0)
+
+        def send(sender: int, kind: str, msg) -> None:
+            pub.publish(inbox.pack(sender, [(kind, msg)]))
+
         k = victim.filter.step + 1
-        state.publish(_state(0, k, x=math.nan))                      # NaN position
-        state.publish(_state(99, k))                                 # unknown robot id
-        state.publish(_state(1, k))                                  # its own id: duplicate
-        state.publish(_state(0, 10**6))                              # step out of range
-        meas.publish(MeasurementSet(header=convert.header(k, 0.5, "map"), robot_id=2,
-                                    step=k, sensor_position=Point(x=1.0, y=1.0),
-                                    measurements=[Point(x=1.0, y=1.0)] * 20_000))  # absurd
-        parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
-                                       to_id=1, step=k, kind=0, bin_indices=[10**8],
-                                       weights=[0.1]))              # bin off the grid
-        parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
-                                       to_id=1, step=k, kind=0, radius_ids=[2],
-                                       cell_radii=[-1.0]))          # negative cell radius
-        parts.publish(ParticleTransfer(header=convert.header(k, 0.5, "map"), from_id=0,
-                                       to_id=2, step=k, kind=0))    # for another robot
+        send(0, "state", _state(0, k, x=math.nan))                   # NaN position
+        send(99, "state", _state(99, k))                             # unknown robot id
+        send(1, "state", _state(1, k))                               # its own id: duplicate
+        send(0, "state", _state(0, 10**6))                           # step out of range
+        send(2, "state", _state(0, k))                               # robot 0's, from 2
+        send(2, "measurements", MeasurementSet(
+            header=convert.header(k, 0.5, "map"), robot_id=2, step=k,
+            sensor_position=Point(x=1.0, y=1.0),
+            measurements=[Point(x=1.0, y=1.0)] * 20_000))            # absurd
+        send(0, "particles", ParticleTransfer(
+            header=convert.header(k, 0.5, "map"), from_id=0, to_id=1, step=k, kind=0,
+            bin_indices=[10**8], weights=[0.1]))                     # bin off the grid
+        send(0, "particles", ParticleTransfer(
+            header=convert.header(k, 0.5, "map"), from_id=0, to_id=1, step=k, kind=0,
+            radius_ids=[2], cell_radii=[-1.0]))                      # negative cell radius
+        send(0, "particles", ParticleTransfer(
+            header=convert.header(k, 0.5, "map"), from_id=0, to_id=2, step=k,
+            kind=0))                                                 # for another robot
+        good = inbox.pack(0, [("state", _state(0, k))])
+        pub.publish(InboxMessage(sender=0, kinds=["gossip"], offsets=good.offsets,
+                                 data=good.data))                    # unknown kind
+        pub.publish(InboxMessage(sender=0, kinds=good.kinds, offsets=[0, 3],
+                                 data=good.data))                    # offsets cut wrong
         assert ros.spin_until(lambda: monitor.done, timeout=120.0)
-        assert dict(victim.rejections) == {"state": 4, "measurements": 1, "particles": 3}
+        assert dict(victim.rejections) == {"state": 5, "measurements": 1, "particles": 3,
+                                           "envelope": 2}
         assert world.dead == set()
         assert len(monitor.series) == scenario.steps
 

@@ -1,7 +1,7 @@
 """Shirsat & Berman's system as ROS nodes in one process, lockstep, against the engine.
 
 Three robot nodes random-walk on the grid with a GM-PHD each and merge their reward sets
-when they meet (``meet_merge`` over ``inbox/rewards``): every robot's components and reward
+when they meet (``meet_merge``, inbox kind ``rewards``): every robot's components and reward
 set, the robots met, and the monitor's figures equal the in-memory engine's bit for bit.
 """
 

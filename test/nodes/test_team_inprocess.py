@@ -45,10 +45,7 @@ def test_lockstep_team_equals_in_memory_engine_and_ospa_falls(tmp_path):
                                     ("cell", "phd_swarm_msgs/msg/CellPolygon"),
                                     ("density", "phd_swarm_msgs/msg/DensityGrid"),
                                     ("estimates", "phd_swarm_msgs/msg/TargetSet"),
-                                    ("inbox/state", "phd_swarm_msgs/msg/RobotState"),
-                                    ("inbox/cell", "phd_swarm_msgs/msg/CellPolygon"),
-                                    ("inbox/particles",
-                                     "phd_swarm_msgs/msg/ParticleTransfer"))}}
+                                    ("inbox", "phd_swarm_msgs/msg/InboxMessage"))}}
     missing = {t: typ for t, typ in expected.items() if typ not in graph.get(t, [])}
     assert not missing, f"topics missing from the graph while the swarm runs: {missing}"
 

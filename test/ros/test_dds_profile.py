@@ -41,8 +41,8 @@ def _hex_to_address(text: str) -> str:
     return ":".join(w.hex() for w in words)
 
 
-def udp_bindings(pid: int) -> list[str]:
-    """Local addresses of the UDP sockets process ``pid`` holds."""
+def udp_bindings(pid: int, ports: bool = False) -> list[str]:
+    """Local addresses (``address:port`` with ``ports``) of the UDP sockets ``pid`` holds."""
     inodes = set()
     for fd in os.listdir(f"/proc/{pid}/fd"):
         try:
@@ -59,7 +59,9 @@ def udp_bindings(pid: int) -> list[str]:
         for line in path.read_text().splitlines()[1:]:
             fields = line.split()
             if fields[9] in inodes:
-                addresses.append(_hex_to_address(fields[1]))
+                address = _hex_to_address(fields[1])
+                port = int(fields[1].split(":")[1], 16)
+                addresses.append(f"{address}:{port}" if ports else address)
     return addresses
 
 
@@ -102,3 +104,34 @@ def test_jazzy_localhost_mode_binds_the_wildcard_address(children):
     bindings = _bindings_while_talking(children, {"ROS_AUTOMATIC_DISCOVERY_RANGE":
                                                   "LOCALHOST"})
     assert "0.0.0.0" in bindings, bindings
+
+
+
+def test_the_discovery_server_and_its_clients_stay_on_loopback(children, tmp_path):
+    """run_swarm's discovery server (an rclpy process with a server profile) and two clients.
+
+    The two clients are given the server as their only discovery peer, find each other
+    through it and talk; every UDP socket of the server and of a client is bound to
+    127.0.0.1.
+    """
+    from phd_swarm.tools.dds import free_udp_port, server_env, server_profile
+
+    port = free_udp_port()
+    profile = tmp_path / "server.xml"
+    profile.write_text(server_profile(port))
+    base = {**os.environ, **profile_env()}
+    server = children.start([sys.executable, "-m", "phd_swarm.tools.discovery_server",
+                             "--profile", str(profile), "--port", str(port)],
+                            env=server_env(base, profile))
+    deadline = time.monotonic() + 30.0
+    while f"127.0.0.1:{port}" not in udp_bindings(server.pid, ports=True):
+        assert server.poll() is None, server.communicate()
+        assert time.monotonic() < deadline, "the server did not bind its port within 30 s"
+        time.sleep(0.1)
+    client = {**base, "ROS_DISCOVERY_SERVER": f"127.0.0.1:{port}"}
+    bindings = _bindings_while_talking(children, client)
+    assert bindings and set(bindings) == {"127.0.0.1"}, bindings
+    server_bindings = udp_bindings(server.pid)
+    assert set(server_bindings) == {"127.0.0.1"}, server_bindings
+    children.stop(server)
+    assert server.returncode == 0, server.communicate()

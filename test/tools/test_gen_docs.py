@@ -65,7 +65,7 @@ def test_a_target_field_shows_only_for_the_presets_whose_kind_uses_it():
 
 def test_qos_summary_resolves_writer_and_reader():
     assert gen_docs.qos_summary("INBOX") == \
-        "reliable, transient local, depth 16 (writer) / 1000 (reader)"
+        "reliable, transient local, depth 64 (writer) / 1000 (reader)"
     assert gen_docs.qos_summary("LATCHED") == "reliable, transient local, depth 1"
 
 

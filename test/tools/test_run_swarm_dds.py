@@ -72,3 +72,41 @@ def test_ready_timeouts_grow_with_the_processes_unless_the_config_sets_them():
     assert big > 60.0 and ready_timeouts(rc, 53) == {"world": big, "robot": big}
     mine = rc.with_overrides(world={"ready_timeout": 4.0})
     assert ready_timeouts(mine, 53) == {"world": 4.0, "robot": big}
+
+
+def test_robots_can_be_started_nicer_also_against_other_sessions(tmp_path, monkeypatch):
+    """``--robot-nice``: ``nice -n`` for the process, and its session's autogroup niceness.
+
+    Each child runs in a session of its own; with autogroup scheduling the CPU is shared
+    between sessions first, so ``nice -n`` alone would change nothing against the world.
+    """
+    from phd_swarm.tools import run_swarm
+
+    assert parse_args(["config/dames_static.yaml"]).robot_nice == run_swarm.ROBOT_NICE == 0
+    assert parse_args(["config/dames_static.yaml", "--robot-nice", "7"]).robot_nice == 7
+    proc = subprocess.Popen(["sleep", "30"], start_new_session=True)
+    try:
+        run_swarm.lower_priority(proc.pid, 7)
+        autogroup = Path(f"/proc/{proc.pid}/autogroup")
+        if autogroup.exists():
+            assert autogroup.read_text().split()[-1] == "7"
+    finally:
+        proc.kill()
+        proc.wait()
+    started = []
+
+    class FakePopen:
+        def __init__(self, argv, **kwargs):
+            started.append((argv, kwargs["env"]))
+            self.pid, self.stdout = 0, iter(())
+
+    monkeypatch.setattr(run_swarm.subprocess, "Popen", FakePopen)
+    monkeypatch.setattr(run_swarm, "lower_priority", lambda pid, nice: started.append(nice))
+    swarm = run_swarm.Swarm(tmp_path, {"A": "1"}, quiet=True)
+    swarm.start("robot_0", "phd_swarm.nodes.robot", ["-p", "robot_id:=0"], nice=7,
+                env={"B": "2"})
+    swarm.start("world", "phd_swarm.nodes.world", [])
+    (argv, env), nice, (world_argv, _) = started
+    assert argv[:3] == ["nice", "-n", "7"] and argv[4:6] == ["-m", "phd_swarm.nodes.robot"]
+    assert env == {"A": "1", "B": "2"} and nice == 7
+    assert world_argv[1:3] == ["-m", "phd_swarm.nodes.world"]

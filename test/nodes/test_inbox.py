@@ -1,0 +1,53 @@
+"""One inbox message per contact and tick: pack and unpack are inverse; bad ones are refused."""
+
+from __future__ import annotations
+
+from array import array
+
+import pytest
+from geometry_msgs.msg import Point
+
+from phd_swarm.nodes import convert, inbox
+from phd_swarm.nodes.convert import InvalidMessage
+from phd_swarm.nodes.voronoi_wire import WIRE
+from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotState
+
+
+def _state(step: int, x: float) -> RobotState:
+    return RobotState(header=convert.header(step, 0.5, "map"), robot_id=4, step=step,
+                      position=Point(x=x, y=5.0), power_weight=0.25, cell_radius=1.5)
+
+
+def _scan(step: int, n: int) -> MeasurementSet:
+    return MeasurementSet(header=convert.header(step, 0.5, "map"), robot_id=4, step=step,
+                          sensor_position=Point(x=1.0, y=2.0),
+                          measurements=[Point(x=float(i), y=-float(i)) for i in range(n)])
+
+
+def test_unpack_returns_what_was_packed_in_order():
+    sent = [("state", _state(3, 1.0)), ("measurements", _scan(3, 5)), ("state", _state(4, 2.0))]
+    env = inbox.pack(4, sent)
+    assert env.sender == 4 and list(env.kinds) == ["state", "measurements", "state"]
+    assert list(env.offsets)[0] == 0 and list(env.offsets)[-1] == len(env.data)
+    got = inbox.unpack(env, WIRE.types)
+    assert [k for k, _ in got] == [k for k, _ in sent]
+    assert [m for _, m in got] == [m for _, m in sent]
+
+
+def test_an_empty_envelope_holds_nothing():
+    assert inbox.unpack(inbox.pack(2, []), WIRE.types) == []
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"kinds": ["gossip"]}, "unknown inbox kind 'gossip'"),
+    ({"offsets": [0, 3]}, r"do not cut \d+ bytes into 1 messages"),
+    ({"offsets": [0]}, "into 1 messages"),
+    ({"offsets": [0, 3], "data": array("B", b"\x00\x01\x00")},
+     r"message 0 \(state\) does not deserialise"),
+])
+def test_a_malformed_envelope_is_refused_with_the_reason(change, match):
+    good = inbox.pack(4, [("state", _state(3, 1.0))])
+    fields = {"sender": 4, "kinds": list(good.kinds), "offsets": list(good.offsets),
+              "data": good.data, **change}
+    with pytest.raises(InvalidMessage, match=match):
+        inbox.unpack(InboxMessage(**fields), WIRE.types)
