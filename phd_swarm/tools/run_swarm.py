@@ -55,9 +55,11 @@ from phd_swarm.tools.dds import (
 from phd_swarm.tools.discovery_server import UP as SERVER_UP
 from phd_swarm.tools.processes import clean_fastdds_shm, stop_process_group
 
-#: With ``--discovery-server auto``, start a server above this many processes (DESIGN.md:
-#: simple discovery among ~40 processes on 2 cores lost matches).
-AUTO_SERVER_PROCESSES = 16
+#: With ``--discovery-server auto`` (the default), start phd_swarm's discovery server above
+#: this many processes. 50 robot processes, 2 steps: ready in 17 s instead of 61 s on 2
+#: cores, 29 s instead of 110 s on one (docs/deployment.md). Smaller runs keep simple
+#: discovery, which the ROS docs and the ros2 CLI expect.
+AUTO_SERVER_PROCESSES = 30
 
 #: Log lines that say the recorder and the monitor are up (their subscriptions made), and
 #: how long the robots' start waits for them [s].
@@ -115,9 +117,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    help=f"niceness of the robot processes (default {ROBOT_NICE}): a higher "
                         "one gives the world, monitor and recorder, which talk to every "
                         "robot, the CPU first (docs/deployment.md)")
-    p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="off",
-                   help="run a Fast DDS discovery server on 127.0.0.1 (auto: when more than "
-                        f"{AUTO_SERVER_PROCESSES} processes)")
+    p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="auto",
+                   help="run a Fast DDS discovery server on 127.0.0.1 (auto, the default: "
+                        f"when more than {AUTO_SERVER_PROCESSES} processes)")
     p.add_argument("--dds", choices=("auto", "localhost", "profile"), default="auto",
                    help="DDS discovery on loopback: Jazzy's LOCALHOST range (at most 32 "
                         "processes find each other), the repository's Fast DDS profile "

@@ -33,7 +33,12 @@ def test_the_profile_replaces_localhost_and_back():
 
 
 def test_the_option_defaults_to_auto():
+    from phd_swarm.tools.run_swarm import AUTO_SERVER_PROCESSES
+
     assert parse_args(["config/dames_static.yaml"]).dds == "auto"
+    # The server from the same size on as the profile; the 50-robot acceptance test uses it.
+    assert parse_args(["config/dames_static.yaml"]).discovery_server == "auto"
+    assert AUTO_SERVER_PROCESSES == AUTO_PROFILE_PROCESSES < 53
     assert parse_args(["config/dames_static.yaml", "--dds", "profile"]).dds == "profile"
 
 

@@ -36,8 +36,9 @@ def test_fifty_robot_processes_are_alive_matched_and_logged(tmp_path, children):
         children.stop(proc)
         raise
     assert proc.returncode == 0, f"{out}\n{err}"
-    # Above 30 processes run_swarm chose the repository's loopback profile by itself.
-    assert "Fast DDS profile loopback_udp.xml" in out
+    # Above 30 processes run_swarm chose, by itself, the repository's loopback profile and
+    # its own discovery server on 127.0.0.1.
+    assert "Fast DDS profile loopback_udp.xml" in out and "discovery server 127.0.0.1:" in out
     run = tmp_path / "fifty"
     summary = json.loads((run / "summary.json").read_text())
     assert summary["robots"] == ROBOTS and summary["steps"] == STEPS
