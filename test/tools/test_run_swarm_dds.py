@@ -115,3 +115,30 @@ def test_robots_can_be_started_nicer_also_against_other_sessions(tmp_path, monke
     assert argv[:3] == ["nice", "-n", "7"] and argv[4:6] == ["-m", "phd_swarm.nodes.robot"]
     assert env == {"A": "1", "B": "2"} and nice == 7
     assert world_argv[1:3] == ["-m", "phd_swarm.nodes.world"]
+
+
+def test_the_discovery_server_refuses_an_environment_that_is_not_its_own(tmp_path, capsys,
+                                                                          monkeypatch):
+    from phd_swarm.tools import discovery_server
+    from phd_swarm.tools.dds import server_env, server_profile
+
+    with pytest.raises(ValueError, match="port 70000 is not a UDP port"):
+        server_profile(70000)
+    profile = tmp_path / "server.xml"
+    profile.write_text(server_profile(40000))
+    assert "<port>40000</port>" in profile.read_text()
+    assert "<address>127.0.0.1</address>" in profile.read_text()
+    env = server_env({"ROS_DISCOVERY_SERVER": "127.0.0.1:1", "ROS_SUPER_CLIENT": "TRUE",
+                      "X": "1"}, profile)
+    assert "ROS_DISCOVERY_SERVER" not in env and "ROS_SUPER_CLIENT" not in env
+    assert env["X"] == "1" and env["FASTRTPS_DEFAULT_PROFILES_FILE"] == str(profile)
+    argv = ["--profile", str(profile), "--port", "40000"]
+    # Fast DDS reads the profile from the environment: without it the server would not be one.
+    monkeypatch.delenv("FASTRTPS_DEFAULT_PROFILES_FILE", raising=False)
+    assert discovery_server.main(argv) == 2
+    assert "FASTRTPS_DEFAULT_PROFILES_FILE must be" in capsys.readouterr().err
+    for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
+        monkeypatch.setenv(var, str(profile))
+    monkeypatch.setenv("ROS_DISCOVERY_SERVER", "127.0.0.1:1")
+    assert discovery_server.main(argv) == 2
+    assert "must not be a client" in capsys.readouterr().err
