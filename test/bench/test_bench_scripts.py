@@ -11,10 +11,14 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def _bench(*args: str, timeout: float) -> subprocess.CompletedProcess:
+    """``scripts/bench.sh ARGS``, its output captured (the exit code is the test's to check)."""
+    return subprocess.run([str(ROOT / "scripts" / "bench.sh"), *args], capture_output=True,
+                          text=True, timeout=timeout, check=False)
+
+
 def test_bench_core_quick_prints_and_writes_figures(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "core", "--quick",
-                             "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("core", "--quick", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     assert "team step dames_moving 1.0 m" in result.stdout
     files = list(tmp_path.glob("core-*.json"))
@@ -27,16 +31,13 @@ def test_bench_core_quick_prints_and_writes_figures(tmp_path):
 
 
 def test_bench_rejects_unknown_suite():
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "nonsense"],
-                            capture_output=True, text=True, timeout=120, check=False)
+    result = _bench("nonsense", timeout=120)
     assert result.returncode == 2
     assert "usage" in result.stderr
 
 
 def test_bench_comms_quick_reports_traffic_per_team_size(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "comms", "--quick",
-                             "--sizes", "4,8", "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("comms", "--quick", "--sizes", "4,8", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     data = json.loads(next(tmp_path.glob("comms-*.json")).read_text())
     rows = {r["robots"]: r for r in data["results"]}
@@ -49,9 +50,7 @@ def test_bench_comms_quick_reports_traffic_per_team_size(tmp_path):
 
 
 def test_bench_engines_quick_compares_the_two_engines(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "engines", "--quick",
-                             "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("engines", "--quick", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     assert "central" in result.stdout and "dames_static PHD 10 robots" in result.stdout
     data = json.loads(next(tmp_path.glob("engines-*.json")).read_text())
@@ -66,9 +65,8 @@ def test_bench_engines_quick_compares_the_two_engines(tmp_path):
 @pytest.mark.slow
 @pytest.mark.full
 def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "recorder", "--quick",
-                             "--interrupt-after", "2", "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=600, check=False)
+    result = _bench("recorder", "--quick", "--interrupt-after", "2", "--out", str(tmp_path),
+                    timeout=600)
     assert result.returncode == 0, result.stderr
     data = json.loads(next(tmp_path.glob("recorder-*.json")).read_text())
     runs = data["results"]["runs"]
@@ -88,9 +86,7 @@ def test_bench_recorder_quick_reports_a_complete_log_and_the_stop_time(tmp_path)
 
 def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
     # --no-stonesoup: the project's .venv only, no Stone Soup, no network.
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "estimators", "--quick",
-                             "--no-stonesoup", "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("estimators", "--quick", "--no-stonesoup", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     assert "stonesoup 1.9.1" not in result.stdout
     lines = result.stdout.splitlines()
@@ -153,9 +149,7 @@ def test_bench_shirsat_quick_times_the_robot_step_and_the_ros_run(tmp_path, chil
 @pytest.mark.slow
 def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
     """The ROS run of the benchmark is test_run_swarm_papaioannou's; --no-ros skips it here."""
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "papaioannou", "--quick",
-                             "--no-ros", "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("papaioannou", "--quick", "--no-ros", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     trial, *rewards = json.loads(next(tmp_path.glob("papaioannou-*.json")).read_text())[
         "results"]
@@ -169,9 +163,7 @@ def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
 @pytest.mark.slow
 @pytest.mark.full
 def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "swarm", "--quick",
-                             "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=600, check=False)
+    result = _bench("swarm", "--quick", "--out", str(tmp_path), timeout=600)
     assert result.returncode == 0, result.stderr
     rows = json.loads(next(tmp_path.glob("swarm-*.json")).read_text())["results"]
     assert [(r["layout"], r["processes"]) for r in rows] == [
@@ -185,18 +177,14 @@ def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
 
 
 def test_bench_swarm_rejects_an_unknown_layout():
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "swarm", "--layouts",
-                             "processes,clusters"], capture_output=True, text=True,
-                            timeout=120, check=False)
+    result = _bench("swarm", "--layouts", "processes,clusters", timeout=120)
     assert result.returncode == 2 and "clusters" in result.stderr
 
 
 @pytest.mark.ros
 @pytest.mark.slow
 def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
-    result = subprocess.run([str(ROOT / "scripts" / "bench.sh"), "discovery", "--quick",
-                             "--out", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = _bench("discovery", "--quick", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     (row,) = json.loads(next(tmp_path.glob("discovery-*.json")).read_text())["results"]
     assert (row["mode"], row["processes"], row["exited"]) == ("profile", 10, 10)
