@@ -393,31 +393,34 @@ def run(opts: argparse.Namespace) -> int:
     for var in CLIENT_VARS:
         env.pop(var, None)
     common = ["--params-file", str(params)]
-    server = None
-    if use_server:
-        server, address = _start_discovery_server(run_dir, env)
-        # Plain clients: each learns only the endpoints on its own topics. A super client
-        # (ROS_SUPER_CLIENT) learns everything, which is what made the server do worse than
-        # simple discovery in the first slice of issue 21; only the recorder's ``discover``
-        # mode, which polls the whole graph, needs it.
-        env["ROS_DISCOVERY_SERVER"] = address
-    print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
-          f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed {s.seed}, "
-          f"{rc.param('world', 'mode')} mode; ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
-          + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else "")
-          + (f", Fast DDS profile {DDS_PROFILE.name}"
-             if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT" else ""),
-          flush=True)
-    print(f"run_swarm: results in {run_dir}/", flush=True)
-    swarm = Swarm(run_dir, env, opts.quiet)
+    swarm = Swarm(run_dir, env, opts.quiet)   # its children get ``env`` as it is then
     started = time.monotonic()
     interrupted = False
     code = 0
+    server = None
     # SIGINT explicitly too: a shell that starts a job in the background (nohup, `cmd &` in
     # a script) makes it ignore SIGINT, and Python then installs no handler for it.
     previous = {sig: signal.signal(sig, _raise_interrupt)
                 for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
+        if use_server:
+            # Inside the try: the server is stopped like every other child, whatever
+            # happens after it started.
+            server, address = _start_discovery_server(run_dir, env)
+            # Plain clients: each learns only the endpoints on its own topics. A super
+            # client (ROS_SUPER_CLIENT) learns everything, which is what made the server do
+            # worse than simple discovery in the first slice of issue 21; only the
+            # recorder's ``discover`` mode, which polls the whole graph, needs it.
+            env["ROS_DISCOVERY_SERVER"] = address
+        print(f"run_swarm: {s.name}, {s.robots} robots, {s.targets.count} targets, "
+              f"{s.duration:g} s sim ({s.steps} steps), controller {controller}, seed "
+              f"{s.seed}, {rc.param('world', 'mode')} mode; "
+              f"ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
+              + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else "")
+              + (f", Fast DDS profile {DDS_PROFILE.name}"
+                 if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT" else ""),
+              flush=True)
+        print(f"run_swarm: results in {run_dir}/", flush=True)
         # The observers first, each up (its subscriptions made) before the robots start:
         # with tens of processes starting at once, a recorder making its ~14 subscriptions
         # per robot got a slice of the CPU and was up 85 s after the robots, which had
