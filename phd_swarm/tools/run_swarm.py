@@ -80,6 +80,14 @@ STARTUP_S_PER_PROCESS = 3.0
 #: by default (docs/deployment.md, "Start-up of a large team").
 ROBOT_NICE = 0
 
+#: Robot processes starting at once (``--start-window``): the next one starts when one of
+#: them is up (its nodes built), or after :data:`PROCESS_UP_TIMEOUT` s. 100 robot processes
+#: started together kept ~100 processes in the run queue of 2 cores for two minutes and the
+#: discovery server's receive socket dropped ~10,000 datagrams; with 8 at a time the load
+#: stayed near 12 and nothing was dropped (docs/deployment.md, "Start-up of a large team").
+START_WINDOW = max(4, 4 * (os.cpu_count() or 1))
+PROCESS_UP_TIMEOUT = 60.0
+
 #: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
 #: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
 AUTO_PROFILE_PROCESSES = 30
@@ -117,6 +125,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    help=f"niceness of the robot processes (default {ROBOT_NICE}): a higher "
                         "one gives the world, monitor and recorder, which talk to every "
                         "robot, the CPU first (docs/deployment.md)")
+    p.add_argument("--start-window", type=int, default=START_WINDOW, metavar="N",
+                   help=f"robot processes starting at once (default {START_WINDOW}, 4 per "
+                        "core): the next starts when one is up. 0: all at once")
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="auto",
                    help="run a Fast DDS discovery server on 127.0.0.1 (auto, the default: "
                         f"when more than {AUTO_SERVER_PROCESSES} processes)")
@@ -137,7 +148,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--record-inboxes", action="store_true",
                    help="also record the protocol traffic (/robot_*/inbox) in run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
-    return p.parse_args(argv)
+    opts = p.parse_args(argv)
+    if opts.start_window < 0:
+        p.error(f"--start-window: a number of processes >= 0, got {opts.start_window}")
+    return opts
 
 
 def resolve(opts: argparse.Namespace) -> RunConfig:
@@ -260,6 +274,10 @@ class Swarm:
             self._up[waiting[0]].wait(timeout=0.1)
             waiting = [n for n in waiting if not self._up[n].is_set()]
         return waiting
+
+    def is_up(self, name: str) -> bool:
+        """Whether child ``name`` logged its up marker."""
+        return name in self._up and self._up[name].is_set()
 
     def cpu_seconds(self, name: str) -> float:
         """User + system CPU time child ``name`` has used so far [s] (0 once it is gone)."""
@@ -436,16 +454,7 @@ def run(opts: argparse.Namespace) -> int:
         if late:
             print(f"run_swarm: {' and '.join(late)} not up after {OBSERVERS_UP_TIMEOUT:g} s; "
                   "starting the robots anyway (see their logs)", file=sys.stderr)
-        for first in range(0, s.robots, per):
-            ids = list(range(first, min(first + per, s.robots)))
-            if per == 1:
-                swarm.start(f"robot_{first}", "phd_swarm.nodes.robot",
-                            [*common, "-r", f"__ns:={robot_namespace(first)}",
-                             "-p", f"robot_id:={first}"], nice=opts.robot_nice)
-            else:
-                swarm.start(f"robots_{ids[0]}-{ids[-1]}", "phd_swarm.nodes.team",
-                            common, extra=["--ids", f"{ids[0]}-{ids[-1]}"],
-                            nice=opts.robot_nice)
+        _start_robots(swarm, s.robots, per, common, opts.robot_nice, opts.start_window)
         world = swarm.start("world", "phd_swarm.nodes.world", common, echo=True)
         while world.poll() is None:
             time.sleep(0.2)
@@ -495,6 +504,56 @@ def run(opts: argparse.Namespace) -> int:
               file=sys.stderr)
         return code
     return _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
+
+
+def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: int,
+                  window: int) -> None:
+    """Start the robot processes, at most ``window`` of them starting at a time (0: all).
+
+    A process has started when its last robot logged that it is built (``robot <id>:
+    system``); one that has not after :data:`PROCESS_UP_TIMEOUT` s, or exited, leaves the
+    window. Prints progress when the window is smaller than the team of processes.
+    """
+    t0 = time.monotonic()
+    pending = list(range(0, robots, per))
+    total = len(pending)
+    window = window if window > 0 else total
+    starting: dict[str, float] = {}
+    up, late, reported = 0, [], 0
+    while pending or starting:
+        while pending and len(starting) < window:
+            first = pending.pop(0)
+            last = min(first + per, robots) - 1
+            marker = f"robot {last}: system "
+            if per == 1:
+                name = f"robot_{first}"
+                swarm.start(name, "phd_swarm.nodes.robot",
+                            [*common, "-r", f"__ns:={robot_namespace(first)}",
+                             "-p", f"robot_id:={first}"], nice=nice, up_marker=marker)
+            else:
+                name = f"robots_{first}-{last}"
+                swarm.start(name, "phd_swarm.nodes.team", common,
+                            extra=["--ids", f"{first}-{last}"], nice=nice, up_marker=marker)
+            starting[name] = time.monotonic()
+        if window >= total:
+            return
+        time.sleep(0.05)
+        now = time.monotonic()
+        for name, since in list(starting.items()):
+            if swarm.is_up(name):
+                up += 1
+            elif swarm.procs[name].poll() is not None or now - since > PROCESS_UP_TIMEOUT:
+                late.append(name)
+            else:
+                continue
+            del starting[name]
+        if up - reported >= window or (not pending and not starting):
+            reported = up
+            print(f"run_swarm: {up} of {total} robot processes up ({now - t0:.0f} s)",
+                  flush=True)
+    if late:
+        print(f"run_swarm: not up within {PROCESS_UP_TIMEOUT:g} s or exited: {', '.join(late)}",
+              file=sys.stderr, flush=True)
 
 
 def _ensure_bag_metadata(mcap: Path) -> None:

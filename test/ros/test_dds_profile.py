@@ -11,6 +11,7 @@ processes' sockets from /proc: their inodes from /proc/PID/fd, their local addre
 from __future__ import annotations
 
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -135,3 +136,35 @@ def test_the_discovery_server_and_its_clients_stay_on_loopback(children, tmp_pat
     assert set(server_bindings) == {"127.0.0.1"}, server_bindings
     children.stop(server)
     assert server.returncode == 0, server.communicate()
+
+
+def _occupy_participant_ports(domain: int, participants: int) -> list[socket.socket]:
+    """Bind the unicast ports of the first ``participants`` participant slots of ``domain``.
+
+    RTPS gives participant ``p`` the ports 7400 + 250 d + 10 + 2 p (discovery) and + 11 + 2 p
+    (user data); a new participant takes the first free slot.
+    """
+    base = 7400 + 250 * domain + 10
+    held = []
+    for port in range(base, base + 2 * participants):
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        s.bind(("127.0.0.1", port))
+        held.append(s)
+    return held
+
+
+def test_with_the_profile_peers_past_the_hundredth_participant_talk(children):
+    """The 102nd participant on a host must still discover and be discovered.
+
+    Fast DDS looks for a free participant slot at most ``mutation_tries`` times (100 by
+    default); past that a participant opened no discovery socket and never found anybody
+    (100 robot processes, docs/deployment.md). With the first 110 slots held, two peers on
+    the profile (300 tries) still talk.
+    """
+    held = _occupy_participant_ports(children.domain_id, 110)
+    try:
+        bindings = _bindings_while_talking(children, profile_env())
+    finally:
+        for s in held:
+            s.close()
+    assert set(bindings) == {"127.0.0.1"}, bindings
