@@ -2,22 +2,29 @@
 
 Robot ``j`` sends everything its exchange has for robot ``i`` in one tick as one
 ``phd_swarm_msgs/InboxMessage`` on ``/robot_<i>/inbox``: the kinds in order, each message the
-ROS message of its kind (:class:`phd_swarm.nodes.wire.Wire`) serialised as CDR. One topic
-per robot rather than one per kind keeps the DDS endpoints a crowded start creates at
-N (N - 1) instead of 6 N (N - 1) for Dames' six kinds, and one message per contact and tick
-instead of one per protocol message (docs/decisions.md, "One inbox topic per robot").
+ROS message of its kind (:class:`phd_swarm.nodes.wire.Wire`) serialised as CDR, exactly as
+``rclpy.serialization.serialize_message`` gives it. One topic per robot rather than one per
+kind keeps the DDS endpoints a crowded start creates at N (N - 1) instead of 6 N (N - 1) for
+Dames' six kinds, and one message per contact and tick instead of one per protocol message
+(docs/decisions.md, "One inbox topic per robot").
 
-:func:`pack` and :func:`unpack` are each other's inverse; :func:`unpack` refuses a malformed
-envelope with :class:`phd_swarm.nodes.convert.InvalidMessage` naming what is wrong.
+:func:`pack` and :func:`unpack` are each other's inverse on (kind, CDR bytes) pieces: the
+robot node encodes and decodes the pieces with its wire (:attr:`Wire.encode`,
+:attr:`Wire.decode`), without ROS message objects. :func:`unpack` refuses a malformed
+envelope (unknown kind, offsets that do not cut the data) with
+:class:`phd_swarm.nodes.convert.InvalidMessage` naming what is wrong. :func:`messages`
+decodes an envelope into ROS messages with rclpy, e.g. one seen with
+``ros2 topic echo /robot_3/inbox``.
 """
 
 from __future__ import annotations
 
 from array import array
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
+from itertools import accumulate
 from typing import Any
 
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import deserialize_message
 
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm_msgs.msg import InboxMessage
@@ -26,38 +33,46 @@ from phd_swarm_msgs.msg import InboxMessage
 INBOX = "inbox"
 
 
-def pack(sender: int, messages: Sequence[tuple[str, Any]]) -> InboxMessage:
-    """One envelope from robot ``sender`` holding ``messages``: (kind, ROS message) pairs."""
-    blobs = [serialize_message(m) for _, m in messages]
-    offsets = [0]
-    for b in blobs:
-        offsets.append(offsets[-1] + len(b))
+def pack(sender: int, pieces: Sequence[tuple[str, bytes]]) -> InboxMessage:
+    """One envelope from robot ``sender`` holding ``pieces``: (kind, CDR bytes) pairs."""
+    offsets = [0, *accumulate(len(b) for _, b in pieces)]
     # array('B') is what rclpy keeps a uint8[] as: assigning one skips a per-byte check.
-    return InboxMessage(sender=int(sender), kinds=[k for k, _ in messages],
-                        offsets=array("I", offsets), data=array("B", b"".join(blobs)))
+    return InboxMessage(sender=int(sender), kinds=[k for k, _ in pieces],
+                        offsets=array("I", offsets),
+                        data=array("B", b"".join(b for _, b in pieces)))
 
 
-def unpack(msg: InboxMessage, types: Mapping[str, type]) -> list[tuple[str, Any]]:
-    """The (kind, ROS message) pairs of envelope ``msg``; ``types`` maps kind -> ROS type.
+def unpack(msg: InboxMessage, kinds: Collection[str]) -> list[tuple[str, bytes]]:
+    """The (kind, CDR bytes) pieces of envelope ``msg``; ``kinds`` are those it may hold.
 
-    Raises :class:`InvalidMessage` on an unknown kind, offsets that do not cut ``data`` into
-    one piece per kind, or a piece that does not deserialise as its kind.
+    ``kinds`` is typically the wire's ``types`` (kind -> ROS type). Raises
+    :class:`InvalidMessage` on an unknown kind, or offsets that do not cut ``data`` into
+    one piece per kind. Whether each piece decodes is the wire's to say.
     """
-    kinds = list(msg.kinds)
+    names = list(msg.kinds)
     offsets = list(msg.offsets)
     data = bytes(msg.data)
-    if len(offsets) != len(kinds) + 1 or offsets[0] != 0 or offsets[-1] != len(data) \
+    if len(offsets) != len(names) + 1 or offsets[0] != 0 or offsets[-1] != len(data) \
             or any(b < a for a, b in zip(offsets[:-1], offsets[1:], strict=True)):
         raise InvalidMessage(f"offsets {offsets[:8]}{'...' if len(offsets) > 8 else ''} do "
-                             f"not cut {len(data)} bytes into {len(kinds)} messages")
+                             f"not cut {len(data)} bytes into {len(names)} messages")
+    unknown = [k for k in names if k not in kinds]
+    if unknown:
+        raise InvalidMessage(f"unknown inbox kind {unknown[0]!r} (this exchange takes "
+                             f"{', '.join(sorted(kinds)) or 'none'})")
+    return [(k, data[a:b]) for k, a, b in zip(names, offsets[:-1], offsets[1:], strict=True)]
+
+
+def messages(msg: InboxMessage, types: Mapping[str, type]) -> list[tuple[str, Any]]:
+    """The (kind, ROS message) pairs of envelope ``msg``; ``types`` maps kind -> ROS type.
+
+    For people and tools (a robot decodes with its wire). Raises :class:`InvalidMessage`
+    as :func:`unpack` does, or on a piece that does not deserialise as its kind.
+    """
     out = []
-    for i, kind in enumerate(kinds):
-        typ = types.get(kind)
-        if typ is None:
-            raise InvalidMessage(f"unknown inbox kind {kind!r} (this exchange takes "
-                                 f"{', '.join(sorted(types)) or 'none'})")
+    for i, (kind, data) in enumerate(unpack(msg, types)):
         try:
-            out.append((kind, deserialize_message(data[offsets[i]:offsets[i + 1]], typ)))
+            out.append((kind, deserialize_message(data, types[kind])))
         except Exception as exc:  # rclpy raises a bare RuntimeError on bad CDR
             raise InvalidMessage(f"message {i} ({kind}) does not deserialise: {exc}") from None
     return out

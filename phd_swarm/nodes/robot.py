@@ -342,16 +342,16 @@ class RobotNode(Node):
         """Take the protocol messages of one envelope in the order they were sent."""
         self._alive_at = time.monotonic()
         try:
-            messages = inbox.unpack(envelope, self.wire.types)
+            pieces = inbox.unpack(envelope, self.wire.types)
         except convert.InvalidMessage as exc:
             self._reject("envelope", f"inbox message from robot {envelope.sender}: {exc}")
             return
-        for kind, ros_msg in messages:
-            self._on_inbox(kind, ros_msg, envelope.sender)
+        for kind, data in pieces:
+            self._on_inbox(kind, data, envelope.sender)
 
-    def _on_inbox(self, kind: str, ros_msg, sender: int) -> None:
+    def _on_inbox(self, kind: str, data: bytes, sender: int) -> None:
         try:
-            msg = self.wire.from_ros(ros_msg, self.grid, self.params["max_measurements"])
+            msg = self.wire.decode(kind, data, self.grid, self.params["max_measurements"])
             self._check_welcome(msg)
             if self.wire.sender(msg) != sender:
                 raise convert.InvalidMessage(f"sent by robot {self.wire.sender(msg)} inside "
@@ -484,7 +484,7 @@ class RobotNode(Node):
         by_dst: dict[int, list] = {}
         for env in envelopes:
             by_dst.setdefault(env.dst, []).append(
-                (self.wire.kind(env.msg), self.wire.to_ros(env.msg, self.dt, self.frame_id)))
+                (self.wire.kind(env.msg), self.wire.encode(env.msg, self.dt, self.frame_id)))
         for dst, messages in by_dst.items():
             self._peer_publisher(dst).publish(inbox.pack(self.robot_id, messages))
 

@@ -225,19 +225,20 @@ TOPICS_TEMPLATE = """\
 
 ## Inboxes
 
-Protocol traffic is published to the *receiver's* inbox: robot j sends what it has for
-robot i in one tick as one `phd_swarm_msgs/InboxMessage` on `/robot_<i>/inbox`. The message
-lists the protocol messages' kinds (below) and holds each as its kind's ROS message
-serialised as CDR, `data[offsets[n]:offsets[n + 1]]`; `phd_swarm.nodes.inbox.unpack`
-decodes it. So each robot subscribes to one inbox whatever the team size, receives exactly
-the messages addressed to it, and handles O(neighbours) messages per step (its contacts,
-docs/protocol.md) rather than O(team); a sender creates a publisher to a contact's inbox when
-it first needs one. One topic per robot rather than one per kind keeps a crowded start, where
-every robot is every other's contact, at N (N - 1) inbox writers instead of 6 N (N - 1)
+Protocol traffic is published to the *receiver's* inbox: robot j sends what it has for robot
+i in one tick as one `phd_swarm_msgs/InboxMessage` on `/robot_<i>/inbox`. The message lists
+the protocol messages' kinds (below) and holds each as its kind's ROS message serialised as
+CDR, `data[offsets[n]:offsets[n + 1]]`; `phd_swarm.nodes.inbox.messages` decodes it into ROS
+messages (robots decode the CDR straight into numpy, `phd_swarm.nodes.cdr`). So each robot
+subscribes to one inbox whatever the team size, receives exactly the messages addressed to
+it, and handles O(neighbours) messages per step (its contacts, docs/protocol.md) rather than
+O(team); a sender creates a publisher to a contact's inbox when it first needs one. One
+topic per robot rather than one per kind keeps a crowded start, where every robot is every
+other's contact, at N (N - 1) inbox writers instead of 6 N (N - 1)
 ([decisions](decisions.md)). Inbox writers are reliable and transient-local with a short
 history, so the first message of a publisher created a moment ago is not lost: it is
-delivered when the new publisher matches the inbox's subscription. Readers keep a deep
-queue so that a burst is never overwritten before the executor takes it.
+delivered when the new publisher matches the inbox's subscription. Readers keep a deep queue
+so that a burst is never overwritten before the executor takes it.
 
 {inbox_table}
 

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import struct
 
 import pytest
 from geometry_msgs.msg import Point
 from rclpy.parameter import Parameter
+from rclpy.serialization import serialize_message
 
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes.qos import publisher_qos
@@ -33,7 +35,7 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
         ros.spin_until(lambda: pub.get_subscription_count() > 0, timeout=10.0)
 
         def send(sender: int, kind: str, msg) -> None:
-            pub.publish(inbox.pack(sender, [(kind, msg)]))
+            pub.publish(inbox.pack(sender, [(kind, serialize_message(msg))]))
 
         k = victim.filter.step + 1
         send(0, "state", _state(0, k, x=math.nan))                   # NaN position
@@ -54,13 +56,21 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
         send(0, "particles", ParticleTransfer(
             header=convert.header(k, 0.5, "map"), from_id=0, to_id=2, step=k,
             kind=0))                                                 # for another robot
-        good = inbox.pack(0, [("state", _state(0, k))])
+        good = inbox.pack(0, [("state", serialize_message(_state(0, k)))])
         pub.publish(InboxMessage(sender=0, kinds=["gossip"], offsets=good.offsets,
                                  data=good.data))                    # unknown kind
         pub.publish(InboxMessage(sender=0, kinds=good.kinds, offsets=[0, 3],
                                  data=good.data))                    # offsets cut wrong
+        # Pieces that do not decode, each rejected as its kind: a truncated state, a
+        # transfer whose bin count (at byte 36) claims 2^31 bins.
+        transfer = bytearray(serialize_message(ParticleTransfer(
+            header=convert.header(k, 0.5, "map"), from_id=0, to_id=1, step=k, kind=0,
+            bin_indices=[1, 2], weights=[0.1, 0.2])))
+        transfer[36:40] = struct.pack("<I", 2**31)
+        pub.publish(inbox.pack(0, [("state", serialize_message(_state(0, k))[:20]),
+                                   ("particles", bytes(transfer))]))
         assert ros.spin_until(lambda: monitor.done, timeout=120.0)
-        assert dict(victim.rejections) == {"state": 5, "measurements": 1, "particles": 3,
+        assert dict(victim.rejections) == {"state": 6, "measurements": 1, "particles": 4,
                                            "envelope": 2}
         assert world.dead == set()
         assert len(monitor.series) == scenario.steps
