@@ -10,11 +10,12 @@ Dames' six kinds, and one message per contact and tick instead of one per protoc
 
 :func:`pack` and :func:`unpack` are each other's inverse on (kind, CDR bytes) pieces: the
 robot node encodes and decodes the pieces with its wire (:attr:`Wire.encode`,
-:attr:`Wire.decode`), without ROS message objects. :func:`unpack` refuses a malformed
-envelope (unknown kind, offsets that do not cut the data) with
-:class:`phd_swarm.nodes.convert.InvalidMessage` naming what is wrong. :func:`messages`
-decodes an envelope into ROS messages with rclpy, e.g. one seen with
-``ros2 topic echo /robot_3/inbox``.
+:attr:`Wire.decode`), without ROS message objects, and the envelope itself too
+(:func:`pack_cdr`, :func:`unpack_cdr`: it publishes CDR bytes and its subscription is raw).
+:func:`unpack` refuses a malformed envelope (unknown kind, offsets that do not cut the data)
+with :class:`phd_swarm.nodes.convert.InvalidMessage` naming what is wrong. :func:`messages`
+decodes an envelope into ROS messages with rclpy, e.g. one seen with ``ros2 topic echo
+/robot_3/inbox``.
 """
 
 from __future__ import annotations
@@ -24,8 +25,10 @@ from collections.abc import Collection, Mapping, Sequence
 from itertools import accumulate
 from typing import Any
 
+import numpy as np
 from rclpy.serialization import deserialize_message
 
+from phd_swarm.nodes import cdr
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm_msgs.msg import InboxMessage
 
@@ -42,6 +45,33 @@ def pack(sender: int, pieces: Sequence[tuple[str, bytes]]) -> InboxMessage:
                         data=array("B", b"".join(b for _, b in pieces)))
 
 
+def pack_cdr(sender: int, pieces: Sequence[tuple[str, bytes]]) -> bytes:
+    """:func:`pack`, serialised: the CDR of the envelope, for ``Publisher.publish``.
+
+    Built with :mod:`phd_swarm.nodes.cdr`, without an ``InboxMessage`` object: what a
+    robot publishes every tick to each contact.
+    """
+    offsets = np.fromiter(accumulate((len(b) for _, b in pieces), initial=0), np.uint32,
+                          len(pieces) + 1)
+    return cdr.encode(InboxMessage, {
+        "sender": int(sender), "kinds": [k for k, _ in pieces], "offsets": offsets,
+        "data": np.frombuffer(b"".join(b for _, b in pieces), np.uint8)})
+
+
+def unpack_cdr(data: bytes, kinds: Collection[str]) -> tuple[int, list[tuple[str, bytes]]]:
+    """The sender and the (kind, CDR bytes) pieces of a serialised envelope.
+
+    What a robot's raw inbox subscription receives. Raises :class:`InvalidMessage` when the
+    bytes are not an ``InboxMessage``, or as :func:`unpack` does.
+    """
+    try:
+        env = cdr.decode(InboxMessage, data)
+    except cdr.CdrError as exc:
+        raise InvalidMessage(f"not an inbox message: {exc}") from None
+    return env["sender"], _cut(env["kinds"], env["offsets"].tolist(), env["data"].tobytes(),
+                               kinds)
+
+
 def unpack(msg: InboxMessage, kinds: Collection[str]) -> list[tuple[str, bytes]]:
     """The (kind, CDR bytes) pieces of envelope ``msg``; ``kinds`` are those it may hold.
 
@@ -49,9 +79,11 @@ def unpack(msg: InboxMessage, kinds: Collection[str]) -> list[tuple[str, bytes]]
     :class:`InvalidMessage` on an unknown kind, or offsets that do not cut ``data`` into
     one piece per kind. Whether each piece decodes is the wire's to say.
     """
-    names = list(msg.kinds)
-    offsets = list(msg.offsets)
-    data = bytes(msg.data)
+    return _cut(list(msg.kinds), list(msg.offsets), bytes(msg.data), kinds)
+
+
+def _cut(names: list[str], offsets: list[int], data: bytes,
+         kinds: Collection[str]) -> list[tuple[str, bytes]]:
     if len(offsets) != len(names) + 1 or offsets[0] != 0 or offsets[-1] != len(data) \
             or any(b < a for a, b in zip(offsets[:-1], offsets[1:], strict=True)):
         raise InvalidMessage(f"offsets {offsets[:8]}{'...' if len(offsets) > 8 else ''} do "

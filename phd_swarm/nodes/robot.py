@@ -173,7 +173,7 @@ class RobotNode(Node):
                                  subscription_qos("STEP"))
         if self.wire.types:
             self.create_subscription(InboxMessage, inbox.INBOX, self._on_envelope,
-                                     subscription_qos("INBOX"))
+                                     subscription_qos("INBOX"), raw=True)
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
         self.create_timer(self.params["tick_period"], self._on_timer,
@@ -338,16 +338,16 @@ class RobotNode(Node):
         for old in [k for k in self.teams if k < step - 1]:
             del self.teams[old]
 
-    def _on_envelope(self, envelope: InboxMessage) -> None:
-        """Take the protocol messages of one envelope in the order they were sent."""
+    def _on_envelope(self, envelope: bytes) -> None:
+        """Take the protocol messages of one envelope (its CDR) in the order they were sent."""
         self._alive_at = time.monotonic()
         try:
-            pieces = inbox.unpack(envelope, self.wire.types)
+            sender, pieces = inbox.unpack_cdr(envelope, self.wire.types)
         except convert.InvalidMessage as exc:
-            self._reject("envelope", f"inbox message from robot {envelope.sender}: {exc}")
+            self._reject("envelope", f"inbox message: {exc}")
             return
         for kind, data in pieces:
-            self._on_inbox(kind, data, envelope.sender)
+            self._on_inbox(kind, data, sender)
 
     def _on_inbox(self, kind: str, data: bytes, sender: int) -> None:
         try:
@@ -480,13 +480,20 @@ class RobotNode(Node):
         self._sent += len(envelopes)
 
     def _publish(self, envelopes: list[Envelope]) -> None:
-        """One inbox message per receiver, holding its envelopes in order."""
+        """One inbox message per receiver, holding its envelopes in order.
+
+        A message sent to several contacts (a state, a cell) is encoded once.
+        """
         by_dst: dict[int, list] = {}
+        encoded: dict[int, tuple[str, bytes]] = {}
         for env in envelopes:
-            by_dst.setdefault(env.dst, []).append(
-                (self.wire.kind(env.msg), self.wire.encode(env.msg, self.dt, self.frame_id)))
-        for dst, messages in by_dst.items():
-            self._peer_publisher(dst).publish(inbox.pack(self.robot_id, messages))
+            piece = encoded.get(id(env.msg))
+            if piece is None:
+                piece = encoded[id(env.msg)] = (
+                    self.wire.kind(env.msg), self.wire.encode(env.msg, self.dt, self.frame_id))
+            by_dst.setdefault(env.dst, []).append(piece)
+        for dst, pieces in by_dst.items():
+            self._peer_publisher(dst).publish(inbox.pack_cdr(self.robot_id, pieces))
 
     def _release_held(self) -> None:
         """One tick period passed: publish the delayed envelopes that are due."""

@@ -98,6 +98,12 @@ SERVER_UP_TIMEOUT = 60.0
 #: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
 STOP_GRACE = 6.0
 
+#: Seconds the recorder gets to finish its log after SIGINT before SIGKILL, also when the
+#: run is interrupted: it may wait up to 10 s for late step messages (recorder
+#: ``SETTLE_MAX``), and a killed recorder loses its last chunk. With 6 s, an interrupted
+#: run in the test suite once lost a robot's last two statuses.
+RECORDER_STOP_GRACE = 30.0
+
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
 WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
                      "cpu_s", "cpu_s_per_robot", "peak_memory_mb")
@@ -487,13 +493,15 @@ def run(opts: argparse.Namespace) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         if interrupted or code == EXIT_NOT_READY:
-            # The recorder last: it takes what the others flushed as they stopped.
+            # The recorder last: it takes what the others flushed as they stopped, and it
+            # gets as long as at a normal end (it may wait up to 10 s for late messages).
             swarm.stop_many([n for n in swarm.procs if n != "recorder"], STOP_GRACE)
+            swarm.stop_many(["recorder"], RECORDER_STOP_GRACE)
             swarm.stop_all(STOP_GRACE)
         else:
             swarm.stop_many(["world", "monitor"], grace=10.0)
             if record:
-                swarm.stop_many(["recorder"], grace=30.0)
+                swarm.stop_many(["recorder"], RECORDER_STOP_GRACE)
             swarm.stop_all()
         if server is not None:
             stop_process_group(server, 5.0)

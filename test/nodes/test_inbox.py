@@ -7,7 +7,7 @@ from array import array
 import numpy as np
 import pytest
 from geometry_msgs.msg import Point
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 
 from phd_swarm.core.exchange.voronoi_phd.messages import StateMsg
 from phd_swarm.nodes import convert, inbox
@@ -75,3 +75,23 @@ def test_a_malformed_envelope_is_refused_with_the_reason(change, match):
     else:
         with pytest.raises(InvalidMessage, match=match):
             inbox.unpack(bad, WIRE.types)
+    if "deserialise" not in match:
+        with pytest.raises(InvalidMessage, match=match):
+            inbox.unpack_cdr(serialize_message(bad), WIRE.types)
+
+
+def test_the_serialised_envelope_is_the_same_message():
+    """What a robot publishes (CDR bytes) is the InboxMessage pack builds, and back."""
+    sent = _pieces([("state", _state(3, 1.0)), ("measurements", _scan(3, 5))])
+    data = inbox.pack_cdr(4, sent)
+    assert deserialize_message(data, InboxMessage) == inbox.pack(4, sent)
+    assert inbox.unpack_cdr(data, WIRE.types) == (4, sent)
+    assert inbox.unpack_cdr(serialize_message(inbox.pack(7, sent)), WIRE.types) == (7, sent)
+    assert inbox.unpack_cdr(inbox.pack_cdr(2, []), WIRE.types) == (2, [])
+
+
+@pytest.mark.parametrize("cut", [0, 3, 8, 20, -1])
+def test_bytes_that_are_not_an_envelope_are_refused(cut):
+    data = inbox.pack_cdr(4, _pieces([("state", _state(3, 1.0))]))
+    with pytest.raises(InvalidMessage, match="not an inbox message"):
+        inbox.unpack_cdr(data[:cut] if cut >= 0 else b"\x01" + data[1:], WIRE.types)
