@@ -95,3 +95,16 @@ def test_bytes_that_are_not_an_envelope_are_refused(cut):
     data = inbox.pack_cdr(4, _pieces([("state", _state(3, 1.0))]))
     with pytest.raises(InvalidMessage, match="not an inbox message"):
         inbox.unpack_cdr(data[:cut] if cut >= 0 else b"\x01" + data[1:], WIRE.types)
+
+
+@pytest.mark.parametrize("pieces", [
+    [], [("state", b"\x01" * 7)], [("eta_partial", b"a" * 33), ("cell", b""), ("particles", b"z")],
+])
+def test_the_hand_written_envelope_is_the_codecs_byte_for_byte(pieces):
+    from phd_swarm.nodes import cdr
+
+    offsets = np.cumsum([0, *(len(b) for _, b in pieces)]).astype(np.uint32)
+    expected = cdr.encode(InboxMessage, {
+        "sender": 9, "kinds": [k for k, _ in pieces], "offsets": offsets,
+        "data": np.frombuffer(b"".join(b for _, b in pieces), np.uint8)})
+    assert inbox.pack_cdr(9, pieces) == expected
