@@ -170,7 +170,7 @@ class RobotNode(Node):
         #: The step outputs the system's parts bring (density, cell, estimates, components...).
         self.outputs = RobotOutputs(self, self.agent, self.params["publish_density"])
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
-                                 subscription_qos("STEP"))
+                                 subscription_qos("STEP"), raw=True)
         if self.wire.types:
             self.create_subscription(InboxMessage, inbox.INBOX, self._on_envelope,
                                      subscription_qos("INBOX"), raw=True)
@@ -284,10 +284,12 @@ class RobotNode(Node):
         return "; ".join(missing)
 
     # -------------------------------------------------------------------- steps
-    def _on_scan(self, msg: MeasurementSet) -> None:
+    def _on_scan(self, data: bytes) -> None:
+        """The world's measurement set for this robot, taken as CDR (a raw subscription)."""
         self._alive_at = time.monotonic()
         try:
-            scan = convert.scan_from_ros(msg, self.params["max_measurements"])
+            scan = convert.decode(MeasurementSet, data, self.grid,
+                                  self.params["max_measurements"])
             if scan.robot_id != self.robot_id:
                 raise convert.InvalidMessage(f"measurement set of robot {scan.robot_id} on "
                                              f"robot {self.robot_id}'s topic")

@@ -69,8 +69,18 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
         transfer[36:40] = struct.pack("<I", 2**31)
         pub.publish(inbox.pack(0, [("state", serialize_message(_state(0, k))[:20]),
                                    ("particles", bytes(transfer))]))
+        # On the world's topic (a raw subscription, decoded by the robot): another robot's
+        # set, a NaN sensor position, bytes that are not a measurement set.
+        scans = evil.create_publisher(MeasurementSet, "/robot_1/measurements",
+                                      publisher_qos("STEP"))
+        ros.spin_until(lambda: scans.get_subscription_count() > 0, timeout=10.0)
+        for robot_id, x in ((0, 1.0), (1, math.nan)):
+            scans.publish(MeasurementSet(header=convert.header(k + 1, 0.5, "map"),
+                                         robot_id=robot_id, step=k + 1,
+                                         sensor_position=Point(x=x, y=1.0)))
+        scans.publish(serialize_message(_state(0, k))[:6])
         assert ros.spin_until(lambda: monitor.done, timeout=120.0)
-        assert dict(victim.rejections) == {"state": 6, "measurements": 1, "particles": 4,
+        assert dict(victim.rejections) == {"state": 6, "measurements": 4, "particles": 4,
                                            "envelope": 2}
         assert world.dead == set()
         assert len(monitor.series) == scenario.steps
