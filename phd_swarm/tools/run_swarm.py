@@ -520,7 +520,8 @@ def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: 
 
     A process has started when its last robot logged that it is built (``robot <id>:
     system``); one that has not after :data:`PROCESS_UP_TIMEOUT` s, or exited, leaves the
-    window. Prints progress when the window is smaller than the team of processes.
+    window. Prints progress (unless ``--quiet``) when the window is smaller than the team
+    of processes; names the processes that did not come up on stderr.
     """
     t0 = time.monotonic()
     pending = list(range(0, robots, per))
@@ -555,7 +556,7 @@ def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: 
             else:
                 continue
             del starting[name]
-        if up - reported >= window or (not pending and not starting):
+        if not swarm.quiet and (up - reported >= window or (not pending and not starting)):
             reported = up
             print(f"run_swarm: {up} of {total} robot processes up ({now - t0:.0f} s)",
                   flush=True)

@@ -29,7 +29,7 @@ def test_fifty_robot_processes_are_alive_matched_and_logged(tmp_path, children):
     proc = children.start([str(ROOT / "scripts" / "run_swarm.sh"),
                            str(ROOT / "config" / "dames_static.yaml"), "--robots", str(ROBOTS),
                            "--duration", str(STEPS * 0.5), "--seed", "1", "--out",
-                           str(tmp_path), "--name", "fifty", "--quiet"])
+                           str(tmp_path), "--name", "fifty", "--start-window", "8"])
     try:
         out, err = proc.communicate(timeout=600)
     except subprocess.TimeoutExpired:
@@ -39,6 +39,8 @@ def test_fifty_robot_processes_are_alive_matched_and_logged(tmp_path, children):
     # Above 30 processes run_swarm chose, by itself, the repository's loopback profile and
     # its own discovery server on 127.0.0.1.
     assert "Fast DDS profile loopback_udp.xml" in out and "discovery server 127.0.0.1:" in out
+    # ... and started the robot processes a window at a time (--start-window), all up.
+    assert f"run_swarm: {ROBOTS} of {ROBOTS} robot processes up" in out
     run = tmp_path / "fifty"
     summary = json.loads((run / "summary.json").read_text())
     assert summary["robots"] == ROBOTS and summary["steps"] == STEPS

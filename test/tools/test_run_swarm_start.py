@@ -19,7 +19,9 @@ class _Proc:
 class FakeSwarm:
     """Records starts; a process is up after ``up_after`` polls of :meth:`is_up`."""
 
-    def __init__(self, up_after: int = 2, never_up: tuple[str, ...] = ()) -> None:
+    def __init__(self, up_after: int = 2, never_up: tuple[str, ...] = (),
+                 quiet: bool = False) -> None:
+        self.quiet = quiet
         self.procs: dict[str, _Proc] = {}
         self.polls: dict[str, int] = {}
         self.markers: dict[str, str] = {}
@@ -88,3 +90,9 @@ def test_the_window_defaults_to_four_per_core_and_refuses_a_negative_one():
     assert run_swarm.START_WINDOW >= 4
     with pytest.raises(SystemExit):
         parse_args(["config/dames_static.yaml", "--start-window", "-1"])
+
+
+def test_quiet_runs_print_no_start_progress(capsys, monkeypatch):
+    monkeypatch.setattr(run_swarm.time, "sleep", lambda _: None)
+    _start_robots(FakeSwarm(quiet=True), robots=9, per=1, common=[], nice=0, window=2)
+    assert capsys.readouterr().out == ""
