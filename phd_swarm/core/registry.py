@@ -16,10 +16,13 @@ Each part is registered under a name with :func:`register`, from the module that
 it, together with the options it takes (:class:`~phd_swarm.core.params.ParamSpec`, so every
 option is validated and documented like a node parameter) and what it provides to and
 requires of the other parts (e.g. the Lloyd controllers need a grid density over a cell).
-The built-in parts register when this module first looks a name up; other modules register
-theirs when imported, which a scenario asks for with ``system.plugins`` (module names or
-``.py`` files, :func:`load_plugins`). Adding a system is writing its parts and registering
-them: the robot node, the engines and the sweep runner look them up here.
+A built-in part's module is imported when its name is first looked up
+(:data:`BUILTIN_PARTS`), so that a robot process imports only its own system's parts (the
+others cost ~0.3 s of start-up, SciPy's optimisers and spatial modules among them; listing
+the names imports them all); other modules register theirs when imported, which a scenario
+asks for with ``system.plugins`` (module names or ``.py`` files, :func:`load_plugins`).
+Adding a system is writing its parts and registering them: the robot node, the engines and
+the sweep runner look them up here.
 """
 
 from __future__ import annotations
@@ -37,9 +40,39 @@ from .params import ParamSpec
 #: The roles a system is made of, in the order of a step (docs/architecture.md).
 ROLES = ("sensor", "estimator", "exchange", "controller")
 
-#: Modules that register the built-in parts, imported on the first lookup.
-BUILTIN_MODULES = ("phd_swarm.core.sensors", "phd_swarm.core.estimators",
-                   "phd_swarm.core.exchange", "phd_swarm.core.controllers")
+#: The built-in parts: role -> name -> the module that registers it (and defines its
+#: ``make``), imported on the first lookup of the name; a test checks the table against
+#: what the modules register.
+BUILTIN_PARTS: dict[str, dict[str, str]] = {
+    "sensor": {
+        "disk": "phd_swarm.core.sensors.disk",
+        "disk_false_positive": "phd_swarm.core.sensors.disk_false_positive",
+        "square_range_bearing": "phd_swarm.core.sensors.square_range_bearing",
+    },
+    "estimator": {
+        "grid_phd": "phd_swarm.core.estimators.grid_phd",
+        "papaioannou_sat": "phd_swarm.core.estimators.papaioannou",
+        "shirsat_gmphd": "phd_swarm.core.estimators.shirsat",
+        "sung_gmphd": "phd_swarm.core.estimators.sung",
+    },
+    "exchange": {
+        "meet_merge": "phd_swarm.core.exchange.meet_merge",
+        "none": "phd_swarm.core.exchange.none",
+        "sat_share": "phd_swarm.core.exchange.sat_share",
+        "voronoi_phd": "phd_swarm.core.exchange.voronoi_phd.part",
+    },
+    "controller": {
+        "chen_o": "phd_swarm.core.controllers.power_lloyd",
+        "chen_p": "phd_swarm.core.controllers.power_lloyd",
+        "dtds_walk": "phd_swarm.core.controllers.dtds_walk",
+        "largest_gaussian": "phd_swarm.core.controllers.sung_planners",
+        "lawnmower": "phd_swarm.core.controllers.sung_planners",
+        "nearest_gaussian": "phd_swarm.core.controllers.sung_planners",
+        "phd": "phd_swarm.core.controllers.lloyd",
+        "sat_search_track": "phd_swarm.core.controllers.sat_search_track",
+        "uniform": "phd_swarm.core.controllers.lloyd",
+    },
+}
 
 
 class RegistryError(ValueError):
@@ -115,6 +148,9 @@ def register(role: str, name: str, make: Callable[[Any, int], Any], *, descripti
     old = _PARTS[role].get(name)
     if old is not None and old.make.__module__ != make.__module__:
         raise RegistryError(f"{role} {name!r} is already registered by {old.make.__module__}")
+    builtin = BUILTIN_PARTS[role].get(name)
+    if old is None and builtin is not None and make.__module__ != builtin:
+        raise RegistryError(f"{role} {name!r} is already registered by {builtin} (built in)")
     _PARTS[role][name] = part
     return part
 
@@ -123,26 +159,28 @@ def _load_builtins() -> None:
     global _builtins_loaded
     if not _builtins_loaded:
         _builtins_loaded = True
-        for module in BUILTIN_MODULES:
+        for module in sorted({m for parts in BUILTIN_PARTS.values() for m in parts.values()}):
             importlib.import_module(module)
 
 
 def lookup(role: str, name: str) -> Part:
-    """The part registered as ``name`` for ``role``.
+    """The part registered as ``name`` for ``role``; imports a built-in part's module.
 
     Raises
     ------
     RegistryError
         If there is none; the message lists the names there are.
     """
-    _load_builtins()
     if role not in ROLES:
         raise RegistryError(f"unknown role {role!r}; expected one of {list(ROLES)}")
-    try:
-        return _PARTS[role][name]
-    except KeyError:
+    part = _PARTS[role].get(name)
+    if part is None and name in BUILTIN_PARTS[role]:
+        importlib.import_module(BUILTIN_PARTS[role][name])
+        part = _PARTS[role].get(name)
+    if part is None:
         raise RegistryError(f"unknown {role} {name!r}; expected one of {names(role)} (or "
-                            f"register it from a plugin: system.plugins)") from None
+                            f"register it from a plugin: system.plugins)")
+    return part
 
 
 def names(role: str) -> list[str]:
@@ -162,7 +200,6 @@ def load_plugins(plugins: Iterable[str]) -> None:
     RegistryError
         If a module cannot be found or raises while importing; the message names it.
     """
-    _load_builtins()
     for plugin in plugins:
         try:
             if plugin.endswith(".py") or "/" in plugin:

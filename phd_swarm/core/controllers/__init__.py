@@ -1,6 +1,9 @@
-"""Controllers: the built-in ones register on import (:mod:`phd_swarm.core.registry`)."""
+"""Controllers, one module per part.
 
-from . import dtds_walk, lloyd, power_lloyd, sat_search_track, sung_planners  # noqa: F401  (registration)
+Each module registers its parts on import; the registry imports a built-in one when its
+name is first looked up (:data:`phd_swarm.core.registry.BUILTIN_PARTS`).
+"""
+
 from .base import CellDensity, Controller, Decision, Knowledge
 
 __all__ = ["CellDensity", "Controller", "Decision", "Knowledge"]

@@ -1,3 +1,5 @@
-"""Estimators: the built-in ones register on import (:mod:`phd_swarm.core.registry`)."""
+"""Estimators, one module per part.
 
-from . import grid_phd, papaioannou, shirsat, sung  # noqa: F401  (registration)
+Each module registers its parts on import; the registry imports a built-in one when its
+name is first looked up (:data:`phd_swarm.core.registry.BUILTIN_PARTS`).
+"""

@@ -1,3 +1,5 @@
-"""Sensor models: the built-in ones register on import (:mod:`phd_swarm.core.registry`)."""
+"""Sensor models, one module per part.
 
-from . import disk, disk_false_positive, square_range_bearing  # noqa: F401  (registration)
+Each module registers its parts on import; the registry imports a built-in one when its
+name is first looked up (:data:`phd_swarm.core.registry.BUILTIN_PARTS`).
+"""
