@@ -47,11 +47,14 @@ def _finish(children, proc, timeout: float = 240.0) -> str:
 
 @pytest.mark.ros
 @pytest.mark.slow
-def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, children):
+def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself_forked_or_not(
+        tmp_path, children):
     first = _start(children, tmp_path, "a")
     out = _finish(children, first)
     assert "results in" in out
-    second = _start(children, tmp_path, "b")
+    # The same run with each robot process started as python -m instead of forked from
+    # the fork server: the same results.
+    second = _start(children, tmp_path, "b", "--no-fork-server")
     _finish(children, second)
 
     run = tmp_path / "a"
@@ -73,6 +76,8 @@ def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself(tmp_path, c
     assert 0 < summary["messages_per_robot_per_step"] < 100
 
     again = json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert "fork_server" in summary["cpu_s"] and "fork_server" not in again["cpu_s"]
+    assert not (tmp_path / "b" / "logs" / "fork_server.log").exists()
     for key in WALL_CLOCK_FIELDS:
         summary.pop(key, None)
         again.pop(key, None)
@@ -150,7 +155,12 @@ def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, chi
 
 
 def _pids(run_dir: Path, arg: str) -> list[int]:
-    """PIDs of this run's processes with the argument ``arg`` (a module, ``robot_id:=2``)."""
+    """PIDs of this run's processes with the argument ``arg`` (a module, ``robot_id:=2``).
+
+    A robot process forked by the run's fork server has the server's command line and its
+    own name (``robot_2``; /proc/PID/comm).
+    """
+    robot = re.fullmatch(r"robot_id:=(\d+)", arg)
     out = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -158,9 +168,17 @@ def _pids(run_dir: Path, arg: str) -> list[int]:
         try:
             args = [a.decode(errors="replace")
                     for a in (entry / "cmdline").read_bytes().split(b"\0")]
+            comm = (entry / "comm").read_text().strip()
         except OSError:
             continue
-        if arg in args and any(str(run_dir) in a for a in args):
+        if not any(str(run_dir) in a for a in args):
+            continue
+        if "phd_swarm.tools.fork_server" in args and comm.startswith("robot"):
+            found = (comm == f"robot_{robot.group(1)}" if robot
+                     else arg == "phd_swarm.nodes.robot")
+        else:
+            found = arg in args
+        if found:
             out.append(int(entry.name))
     return out
 
@@ -215,7 +233,8 @@ def test_ctrl_c_stops_every_process_of_the_run(tmp_path, children):
     # Every child but the recorder gets SIGINT at once and SIGKILL after STOP_GRACE s, then
     # the recorder (the figure for 100 robots is in docs/benchmarks.md, not asserted here).
     for module in ("phd_swarm.nodes.robot", "phd_swarm.nodes.world",
-                   "phd_swarm.nodes.monitor", "phd_swarm.nodes.recorder"):
+                   "phd_swarm.nodes.monitor", "phd_swarm.nodes.recorder",
+                   "phd_swarm.tools.fork_server"):
         assert _pids(run, module) == [], module
     summary = json.loads((run / "summary.json").read_text())
     assert 0 < summary["steps"] < 1200 and not summary["complete"]
