@@ -12,7 +12,9 @@ complete. Prints and writes to ``bench/results/swarm-<date>.json``:
 - CPU per robot: CPU seconds of the robot processes per robot per sim second, and per
   robot-step [ms] (start-up included: short runs overstate it);
 - messages received per robot per step (protocol traffic, from the robots' statuses);
-- the largest peak resident memory of a process of the run [MB].
+- the largest peak resident memory of a process of the run [MB] (a forked robot
+  process's counts the pages it shares with the fork server);
+- CPU of the world, monitor, recorder and fork server per step [ms] (start-up included).
 
 ``scripts/bench.sh swarm [--sizes 10,30,50,100] [--layouts processes,grouped,one]
 [--per-group 10] [--record] [--duration S] [--quick]``.
@@ -71,6 +73,10 @@ def run_once(robots: int, per_process: int, duration: float, seed: int,
             "real_time_factor_total": round(s["sim_duration_s"] / s["wall_duration_s"], 3),
             "cpu_per_robot_per_sim_s": round(s["cpu_s_per_robot"] / s["sim_duration_s"], 4),
             "messages_per_robot_per_step": round(s["messages_per_robot_per_step"], 1),
+            # The all-to-all part: CPU of the world, monitor and recorder per step [ms].
+            "cpu_ms_per_step": {k: round(1e3 * s["cpu_s"][k] / max(s["steps"], 1), 1)
+                                for k in ("world", "monitor", "recorder", "fork_server")
+                                if k in s["cpu_s"]},
             "dead_robots": s["dead_robots"]}
 
 
@@ -106,7 +112,8 @@ def main(argv: list[str] | None = None) -> int:
     domain = int(os.environ.get("ROS_DOMAIN_ID", "42"))
     rows = []
     print(f"{'robots':>6} {'layout':<26} {'RTF':>6} {'RTF all':>8} {'CPU/robot':>10} "
-          f"{'ms/step':>8} {'msgs/robot':>10} {'MB/proc':>8} {'log':>8}  dead")
+          f"{'ms/step':>8} {'msgs/robot':>10} {'MB/proc':>8} {'log':>8} "
+          f"{'world/mon/rec ms':>17}  dead")
     with tempfile.TemporaryDirectory(prefix="phd-swarm-bench-") as tmp:
         for n in sizes:
             pers = {"processes": 1, "grouped": min(per_group, n), "one": n}
@@ -114,12 +121,15 @@ def main(argv: list[str] | None = None) -> int:
                 r = run_once(n, per, duration, opts.seed, Path(tmp), domain, record)
                 rows.append(r)
                 log = {None: "-", True: "complete", False: "GAPS"}[r["log_complete"]]
+                observers = "/".join(str(r["cpu_ms_per_step"].get(k, "-"))
+                                     for k in ("world", "monitor", "recorder"))
                 print(f"{n:>6} {r['layout']:<26} {r['real_time_factor']:>6.2f} "
                       f"{r['real_time_factor_total']:>8.2f} "
                       f"{r['cpu_per_robot_per_sim_s']:>10.3f} "
                       f"{r['cpu_ms_per_robot_step']:>8.1f} "
                       f"{r['messages_per_robot_per_step']:>10.1f} "
-                      f"{r['peak_memory_mb_per_process']:>8.0f} {log:>8}  "
+                      f"{r['peak_memory_mb_per_process']:>8.0f} {log:>8} "
+                      f"{observers:>17}  "
                       f"{r['dead_robots']}", flush=True)
     write_results(opts.out, "swarm", machine_meta(duration_s=duration), rows)
     return 0
