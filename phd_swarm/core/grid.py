@@ -138,19 +138,26 @@ class Grid:
         c.setflags(write=False)
         return c
 
+    @cached_property
+    def _origin(self) -> np.ndarray:
+        """``(xmin, ymin)`` [m], shape (2,)."""
+        return np.array([self.env.xmin, self.env.ymin])
+
     def flat_index(self, iy: np.ndarray, ix: np.ndarray) -> np.ndarray:
         """Flat index of bins ``(iy, ix)``."""
         return np.asarray(iy) * self.nx + np.asarray(ix)
 
     def unravel(self, flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Inverse of :meth:`flat_index`: ``(iy, ix)``."""
-        flat = np.asarray(flat)
-        return flat // self.nx, flat % self.nx
+        return np.divmod(np.asarray(flat), self.nx)
 
     def centres_of(self, flat: np.ndarray) -> np.ndarray:
         """Centres of the given bins, shape (len(flat), 2) [m]."""
         iy, ix = self.unravel(flat)
-        return np.stack([self.xs[ix], self.ys[iy]], axis=-1)
+        out = np.empty((ix.size, 2))
+        out[:, 0] = self.xs[ix]
+        out[:, 1] = self.ys[iy]
+        return out
 
     def bin_of(self, points: np.ndarray) -> np.ndarray:
         """Flat index of the bin containing each point; points outside E give -1.
@@ -220,22 +227,31 @@ class Grid:
             return meet
         res = self.resolution
         cx, cy = c[:, 0], c[:, 1]
-        ix0 = np.maximum(np.floor((cx - radius - self.env.xmin) / res - 0.5), 0)
-        ix1 = np.minimum(np.ceil((cx + radius - self.env.xmin) / res - 0.5), self.nx - 1)
-        iy0 = np.maximum(np.floor((cy - radius - self.env.ymin) / res - 0.5), 0)
-        iy1 = np.minimum(np.ceil((cy + radius - self.env.ymin) / res - 0.5), self.ny - 1)
+        # Each disk's box of bin columns (x) and rows (y), both axes at once.
+        lo = np.maximum(np.floor((c - radius - self._origin) / res - 0.5), 0)
+        hi = np.minimum(np.ceil((c + radius - self._origin) / res - 0.5), (self.nx - 1,
+                                                                           self.ny - 1))
+        ix0, iy0, ix1, iy1 = lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]
         iy, ix = self.unravel(flat)
-        cand = np.flatnonzero((ix0 <= ix.max()) & (ix1 >= ix.min()) & (iy0 <= iy.max())
-                              & (iy1 >= iy.min()) & (ix0 <= ix1) & (iy0 <= iy1))
-        x, y = self.xs[ix][:, None], self.ys[iy][:, None]
+        x_lo, x_hi, y_lo, y_hi = int(ix.min()), int(ix.max()), int(iy.min()), int(iy.max())
+        cand = np.flatnonzero(np.logical_and.reduce(
+            (lo <= (x_hi, y_hi)) & (hi >= (x_lo, y_lo)) & (lo <= hi), axis=1))
+        # The squared distances along x of every column of the bins' box to every disk
+        # centre, +inf outside the disk's box (likewise along y): a pair's sum is then the
+        # distance test's value inside both boxes and +inf elsewhere.
+        cols = np.arange(x_lo, x_hi + 1)[:, None]
+        rows = np.arange(y_lo, y_hi + 1)[:, None]
+        ix -= x_lo
+        iy -= y_lo
         r2 = radius * radius
         block = max(1, (1 << 16) // flat.size)
         for start in range(0, cand.size, block):
             k = cand[start:start + block]
-            inside = ((ix[:, None] >= ix0[k]) & (ix[:, None] <= ix1[k])
-                      & (iy[:, None] >= iy0[k]) & (iy[:, None] <= iy1[k]))
-            inside &= (y - cy[k]) ** 2 + (x - cx[k]) ** 2 <= r2
-            meet[k] = inside.any(axis=0)
+            dx2 = (self.xs[x_lo:x_hi + 1, None] - cx[k]) ** 2
+            dx2[(cols < ix0[k]) | (cols > ix1[k])] = np.inf
+            dy2 = (self.ys[y_lo:y_hi + 1, None] - cy[k]) ** 2
+            dy2[(rows < iy0[k]) | (rows > iy1[k])] = np.inf
+            meet[k] = (dy2[iy] + dx2[ix] <= r2).any(axis=0)
         return meet
 
     def image(self, flat: np.ndarray, values: np.ndarray, fill: float = 0.0) -> np.ndarray:

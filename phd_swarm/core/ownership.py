@@ -23,8 +23,10 @@ _BLOCK_ELEMENTS = 1 << 16
 
 #: :func:`assign_bins` prunes generators per block of at most this many points ...
 _PRUNE_BLOCK = 4096
-#: ... when there are more generators than this.
+#: ... when there are more generators than this and more (point, generator) pairs than
+#: :data:`_PRUNE_MIN_PAIRS`: below that the bounds cost more than the pairs they save.
 _PRUNE_MIN_GENERATORS = 8
+_PRUNE_MIN_PAIRS = 1 << 13
 
 #: (bin, generator) pairs up to which :func:`bins_owned_in_box` evaluates every pair.
 _DIRECT_PAIRS = 1 << 14
@@ -35,17 +37,17 @@ def check_generators(positions: np.ndarray,
     q = np.asarray(positions, dtype=float)
     if q.ndim != 2 or q.shape[1] != 2 or q.shape[0] < 1:
         raise ValueError(f"positions must have shape (R, 2) with R >= 1, got {q.shape}")
-    if not np.all(np.isfinite(q)):
+    if not np.isfinite(q).all():
         raise ValueError("positions must be finite")
     if power_weights is None:
-        rho = np.zeros(q.shape[0])
-    else:
-        rho = np.asarray(power_weights, dtype=float)
-        if rho.shape != (q.shape[0],):
-            raise ValueError(f"power_weights must have shape ({q.shape[0]},) to match "
-                             f"positions, got {rho.shape}")
-        if not np.all(np.isfinite(rho)) or np.any(rho < 0):
-            raise ValueError(f"power weights must be finite and >= 0, got {rho}")
+        return q, np.zeros(q.shape[0])
+    rho = np.asarray(power_weights, dtype=float)
+    if rho.shape != (q.shape[0],):
+        raise ValueError(f"power_weights must have shape ({q.shape[0]},) to match "
+                         f"positions, got {rho.shape}")
+    # One pass for both: NaN and +-inf fail one of the two comparisons.
+    if not ((rho >= 0.0) & (rho < np.inf)).all():
+        raise ValueError(f"power weights must be finite and >= 0, got {rho}")
     return q, rho ** 2
 
 
@@ -83,29 +85,53 @@ def assign_bins(points: np.ndarray, positions: np.ndarray,
     -----
     Points are processed in blocks of about 2**16 / R, so memory stays near 1 MB for any
     N (10^6 points x 100 robots is fine). With more than :data:`_PRUNE_MIN_GENERATORS`
-    generators, each block of points first drops the generators that cannot own any of
-    its points, as :func:`bins_owned_in_box` does for its tiles: over the block's bounding
-    box, generator k's power distance lies in [L_k, U_k], and one with L_k > min_j U_j +
-    margin is beaten everywhere in the box. The remaining generators are compared in
-    increasing index order with the same per-pair values, so the owners, ties included,
-    are those of the full comparison; only the cost falls (with 40 generators around a
+    generators and :data:`_PRUNE_MIN_PAIRS` (point, generator) pairs, each block of points
+    first drops the generators that cannot own any of its points, as
+    :func:`bins_owned_in_box` does for its tiles: over the block's bounding box, generator
+    k's power distance lies in [L_k, U_k], and one with L_k > min_j U_j + margin is beaten
+    everywhere in the box. The remaining generators are compared in increasing index order
+    with the same per-pair values, so the owners, ties included, are those of the full
+    comparison; only the cost falls (with 40 generators around a
     field of view at 0.1 m, ~6x fewer pairs).
     """
     q, rho2 = check_generators(positions, power_weights)
     p = np.asarray(points, dtype=float).reshape(-1, 2)
     if not np.all(np.isfinite(p)):
         raise ValueError("points must be finite")
-    index = np.arange(q.shape[0])
-    if candidates is not None:
-        index = np.unique(np.asarray(candidates, dtype=np.int64))
-        if index.size == 0 or index[0] < 0 or index[-1] >= q.shape[0]:
-            raise ValueError(f"candidates must be a non-empty set of indices in "
-                             f"[0, {q.shape[0]}), got {candidates!r}")
-        q, rho2 = q[index], rho2[index]
+    if candidates is None:
+        return assign_checked(p, q, rho2)
+    index = np.unique(np.asarray(candidates, dtype=np.int64))
+    if index.size == 0 or index[0] < 0 or index[-1] >= q.shape[0]:
+        raise ValueError(f"candidates must be a non-empty set of indices in "
+                         f"[0, {q.shape[0]}), got {candidates!r}")
+    return index[assign_checked(p, q[index], rho2[index])]
+
+
+def assign_checked(p: np.ndarray, q: np.ndarray, rho2: np.ndarray) -> np.ndarray:
+    """:func:`assign_bins` of finite points for generators that passed :func:`check_generators`.
+
+    The same owners, ties included, without validating the arguments again: for callers
+    that assign several point sets to one set of generators.
+
+    Parameters
+    ----------
+    p : np.ndarray, shape (N, 2)
+        Finite query points [m].
+    q : np.ndarray, shape (R, 2)
+        Generators [m], as :func:`check_generators` returns them.
+    rho2 : np.ndarray, shape (R,)
+        Squared power weights [m^2], as :func:`check_generators` returns them.
+
+    Returns
+    -------
+    np.ndarray of int64, shape (N,)
+        Row of ``q`` of each point's owner.
+    """
     n_gen = q.shape[0]
     out = np.empty(p.shape[0], dtype=np.int64)
     q0, q1 = q[:, 0], q[:, 1]
-    prune = n_gen > _PRUNE_MIN_GENERATORS and p.shape[0] > 1
+    prune = (n_gen > _PRUNE_MIN_GENERATORS and p.shape[0] > 1
+             and p.shape[0] * n_gen > _PRUNE_MIN_PAIRS)
     block = min(_PRUNE_BLOCK, max(64, 2 * _BLOCK_ELEMENTS // n_gen)) if prune \
         else max(1, _BLOCK_ELEMENTS // n_gen)
     for start in range(0, p.shape[0], block):
@@ -125,7 +151,7 @@ def assign_bins(points: np.ndarray, positions: np.ndarray,
         d -= g_rho2
         best = np.argmin(d, axis=1)
         out[start:start + block] = keep[best] if prune else best
-    return index[out] if candidates is not None else out
+    return out
 
 
 def _contenders(x0: np.ndarray, x1: np.ndarray, q: np.ndarray,
@@ -202,9 +228,8 @@ def bins_owned_in_box(grid: Grid, index: int, positions: np.ndarray,
         return np.empty(0, dtype=np.int64)
     xs, ys = grid.xs[ix0:ix1 + 1], grid.ys[iy0:iy1 + 1]
     if xs.size * ys.size * q.shape[0] <= _DIRECT_PAIRS:
-        iy, ix = np.meshgrid(np.arange(iy0, iy1 + 1), np.arange(ix0, ix1 + 1), indexing="ij")
-        flat = (iy * grid.nx + ix).ravel()
-        return flat[assign_bins(grid.centres_of(flat), q, power_weights) == index]
+        rows, cols = np.nonzero(_rectangle_owned(xs, ys, q, rho2, index))
+        return ((iy0 + rows) * grid.nx + (ix0 + cols)).astype(np.int64)
     # About 8 x 8 tiles, of 4 to 32 bins a side.
     tile = int(np.clip(round(np.sqrt(xs.size * ys.size) / 8), 4, 32))
     col_tile = np.arange(xs.size) // tile
@@ -228,11 +253,36 @@ def bins_owned_in_box(grid: Grid, index: int, positions: np.ndarray,
         rows, cols = np.nonzero(shared[row_tile[:, None], col_tile[None, :]])
         flat = (iy0 + rows) * grid.nx + (ix0 + cols)
         candidates = np.flatnonzero(contender[shared].any(axis=0))
-        mine = assign_bins(grid.centres_of(flat), q, power_weights,
-                           candidates=candidates) == index
+        mine = candidates[assign_checked(grid.centres_of(flat), q[candidates],
+                                         rho2[candidates])] == index
         owned[rows[mine], cols[mine]] = True
     rows, cols = np.nonzero(owned)
     return ((iy0 + rows) * grid.nx + (ix0 + cols)).astype(np.int64)
+
+
+def _rectangle_owned(xs: np.ndarray, ys: np.ndarray, q: np.ndarray, rho2: np.ndarray,
+                     index: int) -> np.ndarray:
+    """Whether :func:`assign_checked` gives each bin centre (xs[i], ys[j]) to ``index``.
+
+    Shape (len(ys), len(xs)). The per-pair values are those of :func:`assign_checked`,
+    ``(x0 - q0)**2 + (x1 - q1)**2 - rho**2`` (the sum of the two squares is commutative,
+    so it rounds alike), with each column's and row's squared difference computed once
+    instead of once per bin. ``index`` is the argmin (the first of the smallest) exactly
+    where its value is below those of the generators before it and not above those after
+    it. Every generator is compared (at most :data:`_DIRECT_PAIRS` pairs): pruning them
+    first cost more than it saved at that size.
+    """
+    dx2 = np.square(xs[None, :] - q[:, 0:1])
+    dy2 = np.square(ys[None, :] - q[:, 1:2])
+    # (generators, rows, columns): the minima over generators run over whole planes.
+    d = dy2[:, :, None] + dx2[:, None, :]
+    d -= rho2[:, None, None]
+    mine = d[index]
+    owned = np.minimum.reduce(d[index + 1:], axis=0) >= mine if index + 1 < len(d) else \
+        np.ones(mine.shape, dtype=bool)
+    if index > 0:
+        owned &= np.minimum.reduce(d[:index], axis=0) > mine
+    return owned
 
 
 def _axis_bounds(lo: np.ndarray, hi: np.ndarray,

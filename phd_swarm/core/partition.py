@@ -24,6 +24,8 @@ so "lowest index" means "lowest robot id".
 
 from __future__ import annotations
 
+import math
+from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,46 +42,46 @@ _MERGE_REL = 1e-12
 _TOUCH_REL = 1e-9
 
 
-def _clip(poly: np.ndarray, f: np.ndarray, merge_tol: float) -> np.ndarray:
+def _clip(poly: np.ndarray, f: np.ndarray, merge_tol: float) -> tuple[np.ndarray, float]:
     """Sutherland-Hodgman clip of a convex polygon (V, 2) to the half-plane f <= 0.
 
     ``f`` (V,) is the affine half-plane function at the vertices. Returns the clipped
     polygon with near-duplicate consecutive vertices merged, or (0, 2) if less than a
-    triangle is left.
+    triangle is left, and its reach: the largest vertex norm [m] (0 for an empty one).
+
+    A cell has a handful of vertices, for which numpy's per-call cost is ~10x the work,
+    so the vertices are walked as Python floats; every value is one IEEE expression per
+    element, as in array form: the crossing point ``v_k + t (v_k+1 - v_k)`` with
+    ``t = f_k / (f_k - f_k+1)``, the merge test ``max |v_i - v_i-1| > merge_tol`` (cyclic)
+    and the reach ``sqrt(max(x^2 + y^2))``.
     """
-    n = poly.shape[0]
-    # Slices of a closed copy instead of np.roll: this runs ~10^3 times per partition
-    # and np.roll's overhead dominated the cost of a clip.
-    closed = np.empty((n + 1, 2))
-    closed[:n] = poly
-    closed[n] = poly[0]
-    f_closed = np.empty(n + 1)
-    f_closed[:n] = f
-    f_closed[n] = f[0]
-    in_closed = f_closed <= 0.0
-    inside = in_closed[:n]
-    crosses = inside != in_closed[1:]
-    fn = f_closed[1:]
-    t = f / np.where(crosses, f - fn, 1.0)
-    hits = poly + t[:, None] * (closed[1:] - poly)
+    pts = poly.tolist()
+    fs = f.tolist()
+    n = len(pts)
+    out = []
     # Per edge k, emit v_k if kept, then the crossing point if the edge crosses.
-    both = np.empty((2 * n, 2))
-    both[0::2] = poly
-    both[1::2] = hits
-    keep = np.empty(2 * n, dtype=bool)
-    keep[0::2] = inside
-    keep[1::2] = crosses
-    out = both[keep]
-    m = out.shape[0]
-    if m < 3:
-        return np.empty((0, 2))
-    step = np.empty(m)
-    step[1:] = np.abs(out[1:] - out[:-1]).max(axis=1)
-    step[0] = np.abs(out[0] - out[-1]).max()
-    distinct = step > merge_tol
-    if np.count_nonzero(distinct) < 3:
-        return np.empty((0, 2))
-    return out[distinct]
+    for k in range(n):
+        nxt = k + 1 if k + 1 < n else 0
+        fk, fn = fs[k], fs[nxt]
+        kept = fk <= 0.0
+        if kept:
+            out.append(pts[k])
+        if kept != (fn <= 0.0):
+            t = fk / (fk - fn)
+            (x0, y0), (x1, y1) = pts[k], pts[nxt]
+            out.append([x0 + t * (x1 - x0), y0 + t * (y1 - y0)])
+    if len(out) < 3:
+        return np.empty((0, 2)), 0.0
+    distinct = []
+    px, py = out[-1]
+    for v in out:
+        x, y = v
+        if max(abs(x - px), abs(y - py)) > merge_tol:
+            distinct.append(v)
+        px, py = x, y
+    if len(distinct) < 3:
+        return np.empty((0, 2)), 0.0
+    return np.array(distinct), math.sqrt(max(x * x + y * y for x, y in distinct))
 
 
 def cells(env: Environment, positions: np.ndarray,
@@ -150,35 +152,36 @@ def _power_cells(env: Environment, q: np.ndarray, rho2: np.ndarray) -> list[np.n
             if beaten[b].any():
                 result.append(np.empty((0, 2)))
                 continue
-            result.append(_clip_cell(env.corners - q[r], e[b], dist[b], h_sorted[b],
-                                     order[b], int(n_far[b]), merge_tol) + q[r])
+            near = order[b, :n_far[b]]
+            result.append(_clip_cell(env.corners - q[r], e[b, near] / dist[b, near, None],
+                                     h_sorted[b, :n_far[b]], merge_tol) + q[r])
     return result
 
 
-def _clip_cell(poly: np.ndarray, e: np.ndarray, dist: np.ndarray, h: np.ndarray,
-               order: np.ndarray, n_far: int, merge_tol: float) -> np.ndarray:
-    """Clip ``poly`` (relative to q_r) by the half-planes y . e_k / dist_k <= h_k.
+def _clip_cell(poly: np.ndarray, u: np.ndarray, h: np.ndarray, merge_tol: float) -> np.ndarray:
+    """Clip ``poly`` (relative to q_r) by the half-planes y . u_k <= h_k.
 
-    ``h`` and ``order`` are sorted by h; only the first ``n_far`` entries are usable. The
-    scan stops at the first h_k >= the largest vertex norm, which no half-plane with a
-    larger h can cut either.
+    ``u`` (K, 2) are the unit vectors e_k / dist_k and ``h`` (K,) the offsets, sorted by h
+    and without the unusable ones (+inf, NaN). The scan stops at the first h_k >= the
+    largest vertex norm, which no half-plane with a larger h can cut either. The products
+    ``poly @ u.T`` are taken over the block of half-planes below that norm: BLAS may round
+    a product differently with the block's shape, so the blocks are part of the rounding.
     """
-    reach = np.sqrt((poly * poly).sum(axis=1).max())
+    bounds = h.tolist()
+    reach = math.sqrt(max(x * x + y * y for x, y in poly.tolist()))
     k = 0
-    while k < n_far:
-        stop = int(np.searchsorted(h[:n_far], reach, side="left"))
+    while k < len(bounds):
+        stop = bisect_left(bounds, reach)
         if stop <= k:
             break
-        idx = order[k:stop]
-        f = poly @ (e[idx] / dist[idx, None]).T - h[k:stop]
-        cutting = (f > 0.0).any(axis=0).nonzero()[0]
-        if cutting.size == 0:
+        f = poly @ u[k:stop].T - h[k:stop]
+        cutting = np.logical_or.reduce(f > 0.0, axis=0)
+        j = int(cutting.argmax())
+        if not cutting[j]:
             break
-        j = int(cutting[0])
-        poly = _clip(poly, f[:, j], merge_tol)
+        poly, reach = _clip(poly, f[:, j], merge_tol)
         if poly.shape[0] == 0:
             break
-        reach = np.sqrt((poly * poly).sum(axis=1).max())
         k += j + 1
     return poly
 
@@ -228,8 +231,8 @@ def cell_of(env: Environment, index: int, positions: np.ndarray,
         h = np.where(same, np.inf, (dist2 + rho2[index] - rho2) / (2.0 * dist))
     order = np.argsort(h, kind="stable")
     h_sorted = h[order]
-    n_far = int(np.count_nonzero(h_sorted < np.inf))
-    poly = _clip_cell(env.corners - q[index], e, dist, h_sorted, order, n_far,
+    near = order[:np.count_nonzero(h_sorted < np.inf)]
+    poly = _clip_cell(env.corners - q[index], e[near] / dist[near, None], h_sorted[:near.size],
                       merge_tol) + q[index]
     if poly.shape[0] == 0:
         return np.empty((0, 2)), np.empty(0, dtype=np.int64)

@@ -77,16 +77,19 @@ def points_in_polygon(points: np.ndarray, poly: np.ndarray, tol: float = 0.0) ->
     v = np.asarray(poly, dtype=float).reshape(-1, 2)
     if v.shape[0] < 3:
         return np.zeros(p.shape[0], dtype=bool)
-    inside = np.ones(p.shape[0], dtype=bool)
-    for k in range(v.shape[0]):
-        a, b = v[k], v[(k + 1) % v.shape[0]]
-        edge = b - a
-        length = np.hypot(edge[0], edge[1])
-        if length == 0.0:
-            continue
+    edge = np.concatenate((v[1:], v[:1])) - v
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    # Zero-length edges are skipped; dividing them by 1 instead keeps the values finite.
+    skip = length == 0.0
+    length[skip] = 1.0
+    inside = np.empty(p.shape[0], dtype=bool)
+    # All edges at once, in blocks of about 2**16 (point, edge) pairs.
+    block = max(1, (1 << 16) // v.shape[0])
+    for start in range(0, p.shape[0], block):
+        x, y = p[start:start + block, 0:1], p[start:start + block, 1:2]
         # Left of a CCW edge is inside: cross(edge, p - a) / |edge| is the inward distance.
-        inward = (edge[0] * (p[:, 1] - a[1]) - edge[1] * (p[:, 0] - a[0])) / length
-        inside &= inward >= -tol
+        inward = (edge[:, 0] * (y - v[:, 1]) - edge[:, 1] * (x - v[:, 0])) / length
+        inside[start:start + block] = ((inward >= -tol) | skip).all(axis=1)
     return inside
 
 

@@ -12,14 +12,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ...grid import Environment
-from ...ownership import assign_bins
+from ...ownership import assign_checked, check_generators
 from ...partition import cell_of
-from ...polygons import bounding_boxes, cell_radii, points_in_any_polygon, points_in_polygon
-from .messages import CellMsg, StateMsg
+from ...polygons import points_in_any_polygon, points_in_polygon
+from .messages import CellMsg, StateMsg, stacked
 
 
 @dataclass(frozen=True)
@@ -50,13 +51,13 @@ class LocalPartition:
                 states: dict[int, StateMsg]) -> LocalPartition:
         """The own cell from the own ``state`` and the contacts' ``states`` (Alg. 1 line 2)."""
         me = state.robot_id
-        ids = np.array(sorted(set(states) | {me}), dtype=np.int64)
-        pos = np.array([state.position if i == me else states[i].position for i in ids],
-                       dtype=float).reshape(-1, 2)
-        rho = np.array([state.power_weight if i == me else states[i].power_weight
-                        for i in ids], dtype=float)
-        poly, rows = cell_of(env, int(np.searchsorted(ids, me)), pos, rho)
-        return cls(ids, pos, rho, poly, tuple(int(ids[r]) for r in rows))
+        order = sorted(set(states) | {me})
+        msgs = [state if i == me else states[i] for i in order]
+        ids = np.array(order, dtype=np.int64)
+        pos = stacked([m.position for m in msgs], 2)
+        rho = np.array([m.power_weight for m in msgs], dtype=float)
+        poly, rows = cell_of(env, order.index(me), pos, rho)
+        return cls(ids, pos, rho, poly, tuple(order[r] for r in rows.tolist()))
 
     def message(self, state: StateMsg, states: dict[int, StateMsg]) -> CellMsg:
         """The own cell for the contacts (Alg. 1 line 3), with the table of ``states``.
@@ -67,13 +68,23 @@ class LocalPartition:
         table = [states[i] for i in sorted(states)]
         return CellMsg(state.robot_id, state.step, state.position, state.power_weight,
                        self.cell, self.neighbours, tuple(m.robot_id for m in table),
-                       np.array([m.position for m in table], dtype=float).reshape(-1, 2),
+                       stacked([m.position for m in table], 2),
                        np.array([m.power_weight for m in table], dtype=float),
                        np.array([m.cell_radius for m in table], dtype=float))
 
     def owners(self, points: np.ndarray) -> np.ndarray:
-        """Ids of the robots owning the bins with centres ``points`` (K, 2), int64 (K,)."""
-        return self.ids[assign_bins(points, self.positions, self.power_weights)]
+        """Ids of the robots owning the bins with centres ``points`` (K, 2), int64 (K,).
+
+        :func:`~phd_swarm.core.ownership.assign_bins` of the bin centres (finite by
+        construction), with the generators checked once per step.
+        """
+        q, rho2 = self._generators
+        return self.ids[assign_checked(np.asarray(points, dtype=float).reshape(-1, 2), q, rho2)]
+
+    @cached_property
+    def _generators(self) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (N, 2) [m] and squared power weights (N,) [m^2], checked."""
+        return check_generators(self.positions, self.power_weights)
 
 
 @dataclass(frozen=True)
@@ -107,13 +118,25 @@ class NeighbourCells:
         polygons = {src: (np.asarray(m.vertices).reshape(-1, 2), tuple(m.neighbour_ids))
                     for src, m in msgs.items()}
         ids = np.fromiter(msgs, dtype=np.int64, count=len(msgs))
-        radii = cell_radii([np.asarray(m.generator, dtype=float) for m in msgs.values()],
-                           [polygons[src][0] for src in msgs])
+        # Positions (arrival order) of the non-empty cells, whose vertices in one array give
+        # both the radii (as polygons.cell_radii) and the boxes (as polygons.bounding_boxes).
+        full = np.array([k for k, (poly, _) in enumerate(polygons.values()) if len(poly)],
+                        dtype=np.intp)
+        radii = np.zeros(ids.size)
+        lo, hi = np.empty((0, 2)), np.empty((0, 2))
+        if full.size:
+            gens = [m.generator[:2] for m in msgs.values()]
+            polys = [p for p, _ in polygons.values()]
+            sizes = [len(polys[k]) for k in full.tolist()]
+            starts = np.cumsum([0, *sizes[:-1]])
+            vertices = np.concatenate([polys[k] for k in full.tolist()])
+            q = np.repeat(stacked([gens[k] for k in full.tolist()], 2), sizes, axis=0)
+            radii[full] = np.sqrt(np.maximum.reduceat(((vertices - q) ** 2).sum(axis=1),
+                                                      starts))
+            lo = np.minimum.reduceat(vertices, starts, axis=0)
+            hi = np.maximum.reduceat(vertices, starts, axis=0)
         order = np.argsort(ids, kind="stable")
-        box_ids = np.array([rid for rid, (poly, _) in polygons.items() if len(poly)],
-                           dtype=np.int64)
-        lo, hi = bounding_boxes([polygons[rid][0] for rid in box_ids.tolist()])
-        return cls(polygons, box_ids, lo, hi, ids[order], radii[order])
+        return cls(polygons, ids[full], lo, hi, ids[order], radii[order])
 
     def cells_of(self, ids: np.ndarray) -> list[np.ndarray]:
         """The cells of the senders ``ids``, in that order."""

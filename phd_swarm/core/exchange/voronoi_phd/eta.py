@@ -101,7 +101,7 @@ class EtaUpdate:
         if fov.size:
             centres = grid.centres_of(fov)
             fov_owners = view.owners(centres)
-            owners = set(np.unique(fov_owners).tolist())
+            owners = set(fov_owners.tolist())
         self.scan_peers = owners - dead
         if fov.size:
             tol = 1e-9 * (grid.env.width + grid.env.height)
@@ -110,8 +110,9 @@ class EtaUpdate:
                 self.stats["uncovered_fov_bins"] += uncovered
                 _log.warning("robot %d: %d field-of-view bins lie in no known cell at step %d",
                              self.robot_id, uncovered, self.step)
-        out = [Envelope(self.robot_id, int(dst),
-                        Scan(self.robot_id, self.step, self.sensor, self.z))
+        # One measurement set for every peer: a broadcast is one message object.
+        scan = Scan(self.robot_id, self.step, self.sensor, self.z)
+        out = [Envelope(self.robot_id, int(dst), scan)
                for dst in sorted(self.scan_peers - {self.robot_id})]
         meet = grid.disks_meet(bins, view.positions, radius)
         pending = set(view.ids[alive(view.ids) & meet].tolist())

@@ -117,8 +117,7 @@ class HandOver:
                              "died during step %d; dropped", self.robot_id, int(lost.sum()),
                              step)
                 idx, owners = idx[~lost], owners[~lost]
-            for dst in np.unique(owners):
-                dst = int(dst)
+            for dst in sorted(set(owners.tolist())):
                 if dst == self.robot_id:
                     raise ProtocolError(f"robot {self.robot_id}: a bin it does not own maps "
                                         f"back to it at step {step}")
@@ -166,16 +165,19 @@ class HandOver:
         owned = self.owned
         w = np.full(owned.size, np.nan)
         assert self._retained is not None
-        parts = [self._retained]
-        for src in sorted(transfers):
-            msg = transfers[src]
-            parts.append((np.asarray(msg.bins, dtype=np.int64), np.asarray(msg.weights),
-                          (None if msg.alpha is None else np.asarray(msg.alpha),
-                           None if msg.count is None else np.asarray(msg.count))))
+        bins, weights, parcel = self._retained
         placed = []
+        if bins.size:
+            # The own bins that stayed are owned (give kept exactly those) and come first.
+            pos = np.searchsorted(owned, bins)
+            w[pos] = weights
+            placed.append((pos, parcel))
+        # Most transfers are empty: only the others are converted.
+        parts = [(np.asarray(msg.bins, dtype=np.int64), np.asarray(msg.weights),
+                  (None if msg.alpha is None else np.asarray(msg.alpha),
+                   None if msg.count is None else np.asarray(msg.count)))
+                 for msg in (transfers[src] for src in sorted(transfers)) if len(msg.bins)]
         for bins, weights, (a, n) in parts:
-            if bins.size == 0:
-                continue
             pos = np.searchsorted(owned, bins)
             ok = (pos < owned.size) & (owned[np.minimum(pos, owned.size - 1)] == bins)
             if not ok.all():

@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import chain
 
 import numpy as np
 
@@ -34,7 +35,7 @@ from ...partition import cell_of, partition
 from ...polygons import cell_radius, isin_sorted
 from .cells import LocalPartition, NeighbourCells
 from .context import FilterContext
-from .messages import CellMsg, Message, StateMsg, TransferMsg
+from .messages import CellMsg, Message, StateMsg, TransferMsg, stacked
 
 _log = logging.getLogger("phd_swarm.protocol")
 
@@ -228,23 +229,20 @@ class Membership:
         # first saves converting every table when everybody is everybody's contact.
         covered = set(states) | self.dead | {self.robot_id}
         tables = [m for m in cells.values() if not covered.issuperset(m.contact_ids)]
-        ids = [np.asarray(m.contact_ids, dtype=np.int64).reshape(-1) for m in tables]
-        ids.append(np.fromiter(states, dtype=np.int64, count=len(states)))
-        pos = [np.asarray(m.contact_positions, dtype=float).reshape(-1, 2) for m in tables]
-        pos.append(np.array([m.position for m in states.values()], dtype=float).reshape(-1, 2))
-        rho = [np.asarray(m.contact_power_weights, dtype=float).reshape(-1) for m in tables]
-        rho.append(np.array([m.power_weight for m in states.values()], dtype=float))
-        radii = [np.asarray(m.contact_cell_radii, dtype=float).reshape(-1) for m in tables]
-        radii.append(np.array([m.cell_radius for m in states.values()], dtype=float))
-        all_ids = np.concatenate(ids)
-        # The last entry of each id wins: its first occurrence in the reversed list.
-        uniq, first = np.unique(all_ids[::-1], return_index=True)
-        last = all_ids.size - 1 - first
-        drop = np.fromiter(self.dead | {self.robot_id}, dtype=np.int64)
-        keep = ~np.isin(uniq, drop)
-        last = last[keep]
-        return KnownStates(uniq[keep], np.concatenate(pos)[last], np.concatenate(rho)[last],
-                           np.concatenate(radii)[last])
+        # The tables' rows in arrival order, then the states': a dict built from them keeps
+        # the row of each robot's last entry.
+        entries = [*chain.from_iterable(m.contact_ids for m in tables), *states]
+        row = dict(zip(entries, range(len(entries)), strict=True))
+        ids = sorted(set(row) - self.dead - {self.robot_id})
+        take = np.array([row[i] for i in ids], dtype=np.int64)
+        return KnownStates(
+            np.array(ids, dtype=np.int64),
+            stacked([m.contact_positions for m in tables]
+                    + [m.position for m in states.values()], 2)[take],
+            stacked([m.contact_power_weights for m in tables]
+                    + [[m.power_weight for m in states.values()]])[take],
+            stacked([m.contact_cell_radii for m in tables]
+                    + [[m.cell_radius for m in states.values()]])[take])
 
     def check_cell(self, view: LocalPartition, known: KnownStates, state: StateMsg) -> None:
         """Count a cell that the contacts' contacts would cut (a missed neighbour).
@@ -319,23 +317,21 @@ def recent_radii(known: KnownStates, cells: NeighbourCells,
     contacts). A robot nobody relayed (its relay died during the step) keeps the previous
     step's radius only.
     """
-    ids = [cells.radius_ids]
-    radii = [cells.radii]
-    for msg in transfers.values():
-        if len(msg.radius_ids):
-            ids.append(np.asarray(msg.radius_ids, dtype=np.int64).reshape(-1))
-            radii.append(np.asarray(msg.cell_radii, dtype=float).reshape(-1))
-    all_ids = np.concatenate(ids)
-    out = known.cell_radii.copy()
-    if all_ids.size == 0 or known.ids.size == 0:
-        return out
     # Every relay of a robot's radius is the same number (the same function of the same
-    # cell), so which one is taken does not matter.
-    uniq, first = np.unique(all_ids, return_index=True)
-    pos = np.searchsorted(uniq, known.ids)
-    pos_c = np.minimum(pos, uniq.size - 1)
-    hit = uniq[pos_c] == known.ids
-    out[hit] = np.maximum(out[hit], np.concatenate(radii)[first[pos_c[hit]]])
+    # cell), so which one is taken does not matter; the first is.
+    sources = [(cells.radius_ids.tolist(), cells.radii)]
+    sources += [(msg.radius_ids, msg.cell_radii) for msg in transfers.values()
+                if len(msg.radius_ids)]
+    out = known.cell_radii.copy()
+    if known.ids.size == 0 or not any(len(ids) for ids, _ in sources):
+        return out
+    # A dict built from the rows in reverse keeps the row of each robot's first entry.
+    entries = [*chain.from_iterable(ids for ids, _ in sources)]
+    first = dict(zip(reversed(entries), range(len(entries) - 1, -1, -1), strict=True))
+    take = np.array([first.get(i, -1) for i in known.ids.tolist()], dtype=np.int64)
+    hit = take >= 0
+    radii = stacked([r for _, r in sources])
+    out[hit] = np.maximum(out[hit], radii[take[hit]])
     return out
 
 

@@ -131,6 +131,16 @@ class TransferMsg:
 Message = StateMsg | CellMsg | Scan | EtaPartialMsg | EtaTotalMsg | TransferMsg
 
 
+def stacked(parts: list, width: int = 0) -> np.ndarray:
+    """Float fields of several messages (arrays or sequences) flattened one after another.
+
+    Returns shape (N,), or (N, width) for ``width`` > 0 when every part holds whole rows
+    (e.g. positions, (n, 2) or (2,) each); the values are the parts' own, in order.
+    """
+    flat = np.concatenate([np.empty(0), *parts], axis=None, dtype=float)
+    return flat.reshape(-1, width) if width else flat
+
+
 def sender_of(msg: Message) -> int:
     """Robot id that sent ``msg``."""
     if isinstance(msg, EtaPartialMsg):
