@@ -127,7 +127,7 @@ def test_bench_sung_quick_times_a_trial_the_gp_and_the_ros_run(tmp_path, childre
     assert all(t["engine_cpu_s"] > 0 and t["scoring_cpu_s"] > 0 for t in trials)
     assert all(gp[f"{n} tracks"] > 0 for n in (1, 10, 50))
     assert ros["steps"] == 600 and ros["complete"] and ros["real_time_factor"] > 0
-    assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", "robot_0"}
+    assert set(ros["cpu_s"]) == {"world", "monitor", "recorder", "robot_0", "fork_server"}
 
 
 @pytest.mark.ros
