@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+from phd_swarm.testing import fresh_domain_id, loopback_env
 from phd_swarm.tools.fork_server import ForkServer
 
 PROBE = '''\
@@ -37,7 +38,9 @@ def main():
 @pytest.fixture
 def server(tmp_path):
     (tmp_path / "fork_probe.py").write_text(PROBE)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), *sys.path]))
+    # The children run a probe, not ROS; they get the loopback environment all the same.
+    env = dict(loopback_env(fresh_domain_id()),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), *sys.path]))
     log = open(tmp_path / "server.log", "w")  # noqa: SIM115
     srv = ForkServer.start(env, log, modules=("fork_probe",))
     srv.env = env
