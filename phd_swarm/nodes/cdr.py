@@ -29,9 +29,10 @@ Values (what :func:`encode` takes and :func:`decode` returns):
   ``Quaternion``): a numpy float64 array of shape (k,), k its field count, in field order;
   a sequence or array of them: an (N, k) array (also a read-only view). For k = 3 (a point)
   :func:`encode` also takes (2,) and (N, 2), with z = 0;
-- any other nested message (``std_msgs/Header``, ``builtin_interfaces/Time``): a dict.
-  Sequences of such messages are not supported (:class:`NotImplementedError` when the codec
-  is built), nor are ``char``, ``byte``, ``wstring`` and ``long double`` fields.
+- any other nested message (``std_msgs/Header``, ``builtin_interfaces/Time``): a dict; a
+  sequence or array of them (``MarkerArray.markers``): a list of dicts, encoded and decoded
+  one element at a time. ``char``, ``byte``, ``wstring`` and ``long double`` fields are not
+  supported (:class:`NotImplementedError` when the codec is built).
 
 A field missing from a dict given to :func:`encode` takes the type's default (that of
 ``Type()``: 0, "", empty, or the default the ``.msg`` file sets). Integers out of their
@@ -340,6 +341,39 @@ class _Vectors:
         return (a if self.size == 0 else a.reshape(n, self.k)), pos + n * row
 
 
+class _Messages:
+    """A sequence or fixed-size array of other messages: a list of dicts (one loop over them)."""
+
+    def __init__(self, codec: _Message, size: int | None, bound: int | None) -> None:
+        self.codec, self.size, self.bound = codec, size, bound
+
+    def encode(self, out: bytearray, value: Any) -> None:
+        value = list(value)
+        _put_length(out, len(value), self.size, self.bound)
+        for i, item in enumerate(value):
+            try:
+                self.codec.encode(out, item)
+            except _Fail as exc:
+                exc.path.insert(0, str(i))
+                raise
+
+    def decode(self, buf: bytes, pos: int) -> tuple[list[dict[str, Any]], int]:
+        if self.size is None:
+            # Every ROS message has a field, so each element takes at least a byte.
+            n, pos = _length(buf, pos, 1, self.bound)
+        else:
+            n = self.size
+        out = []
+        for i in range(n):
+            try:
+                item, pos = self.codec.decode(buf, pos)
+            except _Fail as exc:
+                exc.path.insert(0, str(i))
+                raise
+            out.append(item)
+        return out, pos
+
+
 # ------------------------------------------------------------------------------ messages
 # A message's fields are read and written by ops: one field with its codec, or a run of
 # consecutive primitive fields packed by one struct.
@@ -492,9 +526,11 @@ def _field_codec(owner: str, name: str, t: Any):
         return _Numbers(_CODES[v.typename], size, bound)
     if isinstance(v, AbstractString):
         return _Strings(size, bound, v.maximum_size if isinstance(v, BoundedString) else None)
-    if isinstance(v, NamespacedType) and _float64_fields(_message_class(v)):
-        return _Vectors(_float64_fields(_message_class(v)), size, bound)
-    what = v.name if isinstance(v, NamespacedType) else getattr(v, "typename", type(v).__name__)
+    if isinstance(v, NamespacedType):
+        typ = _message_class(v)
+        k = _float64_fields(typ)
+        return _Vectors(k, size, bound) if k else _Messages(_codec(typ), size, bound)
+    what = getattr(v, "typename", type(v).__name__)
     raise unsupported(f"a sequence of {what}")
 
 

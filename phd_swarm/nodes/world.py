@@ -50,7 +50,7 @@ from phd_swarm.config.node_params import SHARED, WORLD
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
-from phd_swarm.nodes.markers import world_markers
+from phd_swarm.nodes.markers import world_markers_cdr
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.sim.world import World
@@ -174,7 +174,7 @@ class WorldNode(Node):
                 header=h, robot_id=r, step=k, sensor_position=convert.points(positions[r])[0],
                 measurements=convert.points(z)))
         if self.params["publish_markers"]:
-            self.markers_pub.publish(world_markers(
+            self.markers_pub.publish(world_markers_cdr(
                 convert.stamp(k, self.dt), self.frame_id, positions, w.alive,
                 self.scenario.models.detection.radius, truth))
         self._phase = "stepping"

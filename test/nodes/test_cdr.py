@@ -87,8 +87,10 @@ def random_fields(rng: np.random.Generator, typ: type) -> dict:
             n, v = _count(rng), t.value_type
             if isinstance(v, AbstractString):
                 out[name] = [_string(rng) for _ in range(n)]
-            elif isinstance(v, NamespacedType):
+            elif isinstance(v, NamespacedType) and _is_vector(_class(v)):
                 out[name] = rng.normal(0, 100, (n, len(_class(v).SLOT_TYPES)))
+            elif isinstance(v, NamespacedType):
+                out[name] = [random_fields(rng, _class(v)) for _ in range(min(n, 4))]
             else:
                 dtype = np.dtype("<" + CODES[v.typename])
                 out[name] = np.array([_scalar(rng, v.typename) for _ in range(n)], dtype)
@@ -107,7 +109,9 @@ def ros_message(typ: type, fields: dict):
                             if _is_vector(sub) else ros_message(sub, value))
         elif isinstance(t, AbstractNestedType):
             v = t.value_type
-            if isinstance(v, NamespacedType):
+            if isinstance(v, NamespacedType) and not _is_vector(_class(v)):
+                kwargs[name] = [ros_message(_class(v), item) for item in value]
+            elif isinstance(v, NamespacedType):
                 sub = _class(v)
                 keys = list(sub.get_fields_and_field_types())
                 kwargs[name] = [sub(**dict(zip(keys, row, strict=True)))
@@ -124,6 +128,10 @@ def assert_fields_equal(got, want, path="") -> None:
         assert isinstance(got, dict) and list(got) == list(want), path
         for k in want:
             assert_fields_equal(got[k], want[k], f"{path}.{k}")
+    elif isinstance(want, list) and want and isinstance(want[0], dict):
+        assert isinstance(got, list) and len(got) == len(want), path
+        for i, (g, w) in enumerate(zip(got, want, strict=True)):
+            assert_fields_equal(g, w, f"{path}[{i}]")
     elif isinstance(want, np.ndarray):
         assert isinstance(got, np.ndarray) and got.dtype == want.dtype, path
         assert got.shape == want.shape and np.array_equal(got, want), path
@@ -308,8 +316,39 @@ def test_string_sequences_are_checked_string_by_string():
         cdr.decode(InboxMessage, bad)
 
 
-def test_unsupported_fields_fail_when_the_codec_is_built():
+def test_sequences_of_messages_go_both_ways():
+    """MarkerArray: a sequence of Markers, each with sequences of points and of colours."""
     from visualization_msgs.msg import MarkerArray
 
-    with pytest.raises(NotImplementedError, match="markers: a sequence of Marker"):
-        cdr.encode(MarkerArray, {})
+    rng = np.random.default_rng(3)
+    for _ in range(6):
+        fields = random_fields(rng, MarkerArray)
+        ours = cdr.encode(MarkerArray, fields)
+        want = ros_message(MarkerArray, fields)
+        assert deserialize_message(ours, MarkerArray) == want
+        assert_fields_equal(cdr.decode(MarkerArray, ours), fields)
+        assert_fields_equal(cdr.decode(MarkerArray, serialize_message(want)), fields)
+
+
+def test_a_bad_message_in_a_sequence_is_named_by_its_index():
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    good = {"ns": "a", "points": np.zeros((2, 3))}
+    with pytest.raises(CdrError, match=r"MarkerArray: cannot encode field markers\.1\.id"):
+        cdr.encode(MarkerArray, {"markers": [good, {"id": 2**40}]})
+    data = cdr.encode(MarkerArray, {"markers": [good, good]})
+    assert [m.ns for m in deserialize_message(data, MarkerArray).markers] == ["a", "a"]
+    for cut in range(4, len(data)):  # every truncation after the encapsulation header
+        with pytest.raises(CdrError, match="MarkerArray: field markers"):
+            cdr.decode(MarkerArray, data[:cut])
+    # A count of markers larger than the bytes left is refused before any is decoded.
+    with pytest.raises(CdrError, match="markers: 4294967295 elements"):
+        cdr.decode(MarkerArray, data[:4] + struct.pack("<I", 0xFFFFFFFF) + data[8:])
+    assert cdr.decode(Marker, cdr.encode(Marker, good))["ns"] == "a"
+
+
+def test_unsupported_fields_fail_when_the_codec_is_built():
+    from std_msgs.msg import Byte
+
+    with pytest.raises(NotImplementedError, match="Byte.data: octet is not supported"):
+        cdr.encode(Byte, {})
