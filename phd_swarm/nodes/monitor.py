@@ -43,7 +43,7 @@ from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
 from phd_swarm.nodes import completeness, convert, gm_convert
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.markers import team_markers
+from phd_swarm.nodes.markers import team_markers_cdr
 from phd_swarm.nodes.meet_merge_wire import reward_points
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
@@ -58,6 +58,9 @@ from phd_swarm_msgs.msg import (
     TeamState,
     TrackSet,
 )
+
+#: No robots.
+_NONE: frozenset[int] = frozenset()
 
 #: Most components / targets a robot's message may hold (bigger ones are rejected).
 MAX_COMPONENTS = 100_000
@@ -115,6 +118,9 @@ class MonitorNode(Node):
         self.outputs: dict[int, dict[int, dict[str, Any]]] = defaultdict(
             lambda: defaultdict(dict))
         self.statuses: dict[int, dict[int, RobotStatus]] = defaultdict(dict)
+        #: Step -> robots whose outputs of that step have all arrived (kept as they come,
+        #: so that checking a step's readiness on every message is not O(team)).
+        self._complete: dict[int, set[int]] = defaultdict(set)
         #: The walk's grid graph nodes (S, 2) [m] when the controller walks on a grid (drawn
         #: every GRID_MARKERS_EVERY steps), and whether robots report meetings.
         controller = self.scenario.system.parts()["controller"]
@@ -188,7 +194,10 @@ class MonitorNode(Node):
     def _output_callback(self, robot: int, kind: str):
         def callback(msg) -> None:
             if msg.step >= self.next_step:
-                self.outputs[msg.step][robot][kind] = msg
+                got = self.outputs[msg.step][robot]
+                got[kind] = msg
+                if len(got) == len(self.inputs):  # only the input kinds are subscribed
+                    self._complete[msg.step].add(robot)
             self._touch()
         return callback
 
@@ -228,11 +237,12 @@ class MonitorNode(Node):
         while not self.done and self.next_step < self.scenario.steps:
             k = self.next_step
             expected = self._expected(k)
-            have = {r for r, got in self.outputs.get(k, {}).items()
-                    if all(kind in got for kind in self.inputs)}
+            have = self._complete.get(k, _NONE)
+            statuses = self.statuses.get(k, {})
+            # The counts first: the subset tests run only once they can succeed.
             complete = (expected is not None and k in self.truth
-                        and expected <= have
-                        and expected <= set(self.statuses.get(k, {})))
+                        and len(have) >= len(expected) and len(statuses) >= len(expected)
+                        and expected <= have and all(r in statuses for r in expected))
             if not complete and not (force and k in self.truth and have):
                 return
             self._process(k)
@@ -241,6 +251,7 @@ class MonitorNode(Node):
             self._finish()
 
     def _process(self, k: int) -> None:
+        self._complete.pop(k, None)
         have = {r: got for r, got in self.outputs.pop(k, {}).items()
                 if all(kind in got for kind in self.inputs)}
         truth = self.truth.pop(k)
@@ -291,7 +302,7 @@ class MonitorNode(Node):
             grid = self.grid_nodes if k % GRID_MARKERS_EVERY == 0 else None
             met = ([r for r, got in have.items() if len(got["reward_set"].met_ids)]
                    if self.meetings else None)
-            self.markers_pub.publish(team_markers(
+            self.markers_pub.publish(team_markers_cdr(
                 stamp, self.frame_id, self.cells, self.positions, self.goals, estimates,
                 grid_nodes=grid, meeting_ids=met))
         every = self.params["progress_every"]
