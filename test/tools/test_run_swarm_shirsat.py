@@ -65,3 +65,36 @@ def test_the_monitor_draws_the_grid_and_the_meetings(shirsat_run):
     assert len(meeting_points) == 60
     assert {k for k, n in meeting_points.items() if n} == {2, 30, 32, 33}
     assert all(n >= 2 for n in meeting_points.values() if n)
+
+
+def test_the_world_draws_every_robot_and_every_target(shirsat_run):
+    """/world/markers (written as CDR by the world): at each step, a sphere at each robot's
+    pose, its id label and field of view, and a cube at each true target."""
+    from phd_swarm.nodes.convert import target_positions
+    from phd_swarm.nodes.markers import FOV_SEGMENTS
+
+    def step_of(stamp) -> int:
+        return round((stamp.sec + stamp.nanosec * 1e-9) / 1.0)
+
+    poses: dict[int, dict[int, tuple[float, float]]] = {}
+    for r in range(3):
+        for rec in read_messages(shirsat_run / "run.mcap", topics=[T.robot_topic(r, "pose")]):
+            p = rec.msg.pose.position
+            poses.setdefault(step_of(rec.msg.header.stamp), {})[r] = (p.x, p.y)
+    truth = {int(rec.msg.step): target_positions(rec.msg)
+             for rec in read_messages(shirsat_run / "run.mcap", topics=[T.WORLD_TRUTH])}
+    drawn = 0
+    for rec in read_messages(shirsat_run / "run.mcap", topics=[T.WORLD_MARKERS]):
+        k = step_of(rec.msg.markers[0].header.stamp)
+        ns = {}
+        for m in rec.msg.markers:
+            ns.setdefault(m.ns, []).append(m)
+        (robots,) = ns["robots"]
+        np.testing.assert_array_equal([(p.x, p.y) for p in robots.points],
+                                      [poses[k][r] for r in range(3)])
+        assert [m.text for m in ns["robot_ids"]] == ["0", "1", "2"]
+        assert len(ns["fov"][0].points) == 3 * 2 * FOV_SEGMENTS
+        (cubes,) = ns["targets"]
+        np.testing.assert_array_equal([(p.x, p.y) for p in cubes.points], truth[k])
+        drawn += 1
+    assert drawn == 60
