@@ -68,8 +68,11 @@ def test_the_monitor_draws_the_grid_and_the_meetings(shirsat_run):
 
 
 def test_the_world_draws_every_robot_and_every_target(shirsat_run):
-    """/world/markers (written as CDR by the world): at each step, a sphere at each robot's
-    pose, its id label and field of view, and a cube at each true target."""
+    """/world/markers, written as CDR by the world, draws the team and the truth.
+
+    At each step: a sphere at each robot's pose, its id label and field of view, and a cube
+    at each true target.
+    """
     from phd_swarm.nodes.convert import target_positions
     from phd_swarm.nodes.markers import FOV_SEGMENTS
 
