@@ -105,13 +105,20 @@ def _segments(vertices: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> lis
     Polygon ``k`` is ``vertices[starts[k]:ends[k]]``; each of its V vertices starts one
     edge to the next vertex, the last one back to the first, so it adds 2V points.
     """
-    n = len(vertices)
-    if n == 0:
+    if len(vertices) == 0:
         return []
+    pts = _points(vertices)
+    return [pts[i] for i in _segment_index(len(vertices), starts, ends).tolist()]
+
+
+def _segment_index(n: int, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Indices (2n,) of the LINE_LIST points of closed polygons stored back to back.
+
+    Each vertex, then the next one of its polygon (the last one's is the first).
+    """
     nxt = np.arange(1, n + 1)
     nxt[ends - 1] = starts
-    pts = _points(vertices)
-    return [pts[i] for i in np.stack([np.arange(n), nxt], axis=1).ravel().tolist()]
+    return np.stack([np.arange(n), nxt], axis=1).ravel()
 
 
 def _finite(xy: np.ndarray) -> np.ndarray:
@@ -140,12 +147,9 @@ def _marker_fields(stamp: Time, frame_id: str, ns: str, marker_id: int, kind: in
 
 def _segment_xy(vertices: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """:func:`_segments` as an (2V, 2) array: the LINE_LIST points of closed polygons."""
-    n = len(vertices)
-    if n == 0:
+    if len(vertices) == 0:
         return vertices.reshape(0, 2)
-    nxt = np.arange(1, n + 1)
-    nxt[ends - 1] = starts
-    return vertices[np.stack([np.arange(n), nxt], axis=1).ravel()]
+    return vertices[_segment_index(len(vertices), starts, ends)]
 
 
 def _marker_array(markers: list[dict[str, object]]) -> bytes:
