@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Run a parameter sweep of the in-memory engine and plot it (Dames 2020 Fig. 2 and 5,
 # Chen, Dames & Park 2021 Fig. 3), see docs/sweeps.md.
-# Usage: scripts/sweep.sh SPEC [--quick] [--workers N] [--out DIR] [--plot-only] [--dry-run]
-#   SPEC: a name under config/sweeps/ (dames_static, dames_moving, chen_clustered,
-#   chen_resolution) or a path to a spec file.
+# Usage: scripts/sweep.sh SPEC [--quick] [--workers N] [--engine E] [--out DIR] [--plot-only]
+#                         [--dry-run] [--recheck N]
+#   SPEC: a name under config/sweeps/ (dames_static, sung_planners, ...) or a path to a
+#   spec file.
 # Results: <out>/results.csv, series/, boxplot.png, ospa_vs_time.png, summary.md
-# (default out: runs/sweeps/<name> or runs/sweeps/<name>_quick). Rerun to resume.
+# (default out: results/sweeps/<name>, in git, or runs/sweeps/<name>_quick; _<engine>
+# appended when --engine is not the spec's own). Rerun to resume.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh" >/dev/null

@@ -19,6 +19,17 @@ preset of :mod:`phd_swarm.sim.scenario`::
     scenario: {...}               # optional: other overrides (scenario_from_dict keys)
     quick: {robots: [10], trials: 2}   # overrides of the keys above for --quick
 
+A variant of a spec names it and gives only what it changes::
+
+    base: sung_planners           # a spec of the same folder
+    scenario: {system: {options: {merge_metric: candidate}}}   # merged into the base's
+    figure: Sung & Tokekar (2022) Table V, merging in each candidate's metric
+
+It is the base with those keys replaced: mappings under ``scenario`` merged key by key,
+every other key (``methods``, ``quick``...) replaced whole. Its name, and so its output
+folder, is its own file's stem. ``scenario.system`` replaces only the parts and options
+it names of the preset's system.
+
 Common random numbers: every method, team size and resolution of trial i uses the same
 scenario seed, hence the same targets (the world draws them from their own stream,
 :mod:`phd_swarm.sim.world`), so method comparisons are paired, as in Dames Sec. IV ("the
@@ -35,6 +46,7 @@ import hashlib
 import json
 import os
 import re
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import partial
@@ -69,7 +81,7 @@ OVERRIDABLE = ("figure", "description", "methods", "robots", "targets", "resolut
                "trials", "base_seed", "duration", "metric", "window", "engine", "scenario")
 
 #: Top-level keys of a spec.
-TOP_KEYS = ("preset", "name", *OVERRIDABLE, "quick")
+TOP_KEYS = ("base", "preset", "name", *OVERRIDABLE, "quick")
 
 #: Scenario fields a sweep sets itself (through its axes), not allowed under ``scenario:``.
 AXIS_FIELDS = ("preset", "robots", "seed", "resolution", "duration")
@@ -181,9 +193,14 @@ class SweepSpec:
     window : (float, float)
         Window [s] of the mean / median OSPA (``(0, duration)`` when unset).
     engine : str
-        One of :data:`ENGINES` (default ``central``).
+        One of :data:`ENGINES`: the engine the trials run on.
     scenario : Mapping
         The ``scenario:`` overrides.
+    spec_engine : str
+        The engine the spec's form names (``engine:``, default ``central``); ``engine``
+        differs from it only when the command line asks for another one.
+    base : str
+        The spec this one is a variant of (``base:``), or empty.
     """
 
     name: str
@@ -203,15 +220,18 @@ class SweepSpec:
     window: tuple[float, float]
     scenario: Mapping[str, Any]
     engine: str = "central"
+    spec_engine: str = "central"
+    base: str = ""
 
     @property
     def label(self) -> str:
         """The default output directory's name: ``name`` or ``name_quick``.
 
-        ``_distributed`` is appended when the trials run on the distributed engine.
+        ``_<engine>`` is appended only when the trials run on another engine than the
+        spec's own (``--engine``), so that their rows never mix with the spec's.
         """
         label = f"{self.name}_quick" if self.quick else self.name
-        return label if self.engine == "central" else f"{label}_{self.engine}"
+        return label if self.engine == self.spec_engine else f"{label}_{self.engine}"
 
     @property
     def metric_label(self) -> str:
@@ -223,8 +243,8 @@ class SweepSpec:
 
     def base_scenario(self) -> Scenario:
         """The preset with the ``scenario:`` overrides and the duration applied."""
-        return scenario_from_dict({"preset": self.preset, **self.scenario,
-                                   "duration": self.duration}, where=str(self.path),
+        doc = _scenario_doc(self.preset, self.scenario, self.path.parent)
+        return scenario_from_dict({**doc, "duration": self.duration}, where=str(self.path),
                                   base_dir=self.path.parent)
 
     def trials_list(self) -> list[Trial]:
@@ -256,12 +276,14 @@ class SweepSpec:
                 "resolutions": list(self.resolutions), "trials": self.trials,
                 "base_seed": self.base_seed, "duration": self.duration,
                 "metric": self.metric, "window": list(self.window),
-                "engine": self.engine, "scenario": _plain(self.scenario)}
+                "engine": self.engine, "scenario": _plain(self.scenario),
+                **({"base": self.base} if self.base else {})}
 
 
 #: Part options added after results that use their parts were committed, with the default
 #: that reproduces those results: at that default they do not enter the hash.
-_LATER_OPTIONS = {"fov_push_to": "paper"}
+_LATER_OPTIONS = {"fov_push_to": "paper", "merge_metric": "candidate",
+                  "overlap_threshold_form": "sum", "reward_union": "position"}
 
 
 def config_hash(scenario: Scenario, controller: str, metric: str,
@@ -272,6 +294,14 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
     is hashed only where it differs from what that text says (other parts, options or
     plugins set under ``scenario:``), so the hashes of results from before the system
     block existed stay valid.
+
+    Two things keep a stored row honest when the code changes under it:
+
+    - An option of :data:`_LATER_OPTIONS` enters with its effective value (the one set, or
+      the default of the part that declares it), unless that value is the one that
+      reproduces the rows from before the option existed.
+    - A part's results revision (:func:`results_revisions`) enters once it is above 1,
+      so a bug fix that changes a part's results orphans that part's rows.
     """
     fields = dataclasses.asdict(scenario)
     fields.pop("system")
@@ -286,19 +316,64 @@ def config_hash(scenario: Scenario, controller: str, metric: str,
     if scenario.targets.kind != "ncv":
         for name in ("spawn", "lifetime_mean", "birth_spread", "process_noise", "noise_form"):
             fields["targets"].pop(name)
+    if scenario.targets.kind != "ncv" or scenario.targets.lifetime_model == "cut":
+        fields["targets"].pop("lifetime_model")
     doc = {"scenario": _plain(fields), "controller": controller,
            "metric": metric, "window": [float(w) for w in window], "engine": engine}
     try:
         implied = SystemConfig().with_parts(**method_system(controller))
     except ValueError:  # the method's parts do not fit the default system's others
         implied = None
+    later = {name: value for name, value in later_options(scenario.system).items()
+             if value != _LATER_OPTIONS[name]}
     if scenario.system != implied:
         doc["system"] = _plain(scenario.system.to_dict())
-        for name, default in _LATER_OPTIONS.items():
-            if doc["system"]["options"].get(name, default) == default:
-                doc["system"]["options"].pop(name, None)
+        for name in _LATER_OPTIONS:
+            doc["system"]["options"].pop(name, None)
+        doc["system"]["options"].update(later)
+    elif later:
+        doc["later_options"] = later
+    revisions = {part: n for part, n in results_revisions(scenario.system).items() if n > 1}
+    if revisions:
+        doc["revisions"] = revisions
     text = json.dumps(doc, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def later_options(system: SystemConfig) -> dict[str, Any]:
+    """Effective value of each :data:`_LATER_OPTIONS` option that ``system``'s parts take.
+
+    The value set in ``system.options``, else the default of the
+    :class:`~phd_swarm.core.params.ParamSpec` of the part that declares the option.
+    """
+    declared = {spec.name: spec for part in system.parts().values() for spec in part.options}
+    given = dict(system.options)
+    return {name: given.get(name, declared[name].default)
+            for name in _LATER_OPTIONS if name in declared}
+
+
+def results_revisions(system: SystemConfig) -> dict[str, int]:
+    """``role.name`` -> results revision of each of ``system``'s parts (1 if undeclared).
+
+    A part declares it as ``register(..., results_revision=n)``, or its module (the one
+    that defines its ``make``) as ``RESULTS_REVISION = n`` for every part it registers.
+    Raise it by one with a fix that changes the part's results: :func:`config_hash` then
+    gives its trials new hashes, and their stored rows stop matching.
+
+    Raises
+    ------
+    ValueError
+        If a revision is not an integer >= 1 (the message names the part).
+    """
+    out = {}
+    for role, part in system.parts().items():
+        module = sys.modules.get(part.make.__module__)
+        n = part.extras.get("results_revision", getattr(module, "RESULTS_REVISION", 1))
+        if type(n) is not int or n < 1:
+            raise ValueError(f"system.{role}: {part.name} declares results revision {n!r}; "
+                             f"expected an integer >= 1")
+        out[f"{role}.{part.name}"] = n
+    return out
 
 
 def _plain(value: Any) -> Any:
@@ -505,6 +580,8 @@ def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) 
     """Read and validate a spec file; ``quick`` applies its ``quick:`` block.
 
     ``engine`` (one of :data:`ENGINES`), when given, replaces the spec's ``engine``.
+    A spec with ``base:`` is read as its base (itself a valid spec of the same folder) with
+    the spec's keys replaced (:func:`with_base`).
 
     Every trial's scenario is built once here, for the full and the quick form, so a bad
     value fails before anything runs.
@@ -513,25 +590,79 @@ def load_spec(path: str | Path, quick: bool = False, engine: str | None = None) 
     ------
     SpecError
         Unreadable file, YAML error, unknown key, wrong type, empty list, unknown preset or
-        method, a window outside the run, or a scenario the presets reject; the message
-        names the file and the key.
+        method, a window outside the run, a scenario the presets reject, or an unknown or
+        circular base; the message names the file and the key.
     """
     path = Path(path)
     if engine is not None and engine not in ENGINES:
         raise SpecError(f"engine: expected one of {list(ENGINES)}, got {engine!r}")
+    doc, base = with_base(path)
+    if base is not None:
+        load_spec(base)  # a base is a spec in its own right; its errors name its file
     try:
-        doc = read_yaml(path, "sweep spec")
-    except ValueError as exc:
-        raise SpecError(str(exc)) from None
-    try:
-        return _load(path, {} if doc is None else doc, quick, engine)
+        return _load(path, doc, quick, engine, base.stem if base else "")
     except SpecError:
         raise
     except ValueError as exc:
         raise SpecError(f"{path}: {exc}") from None
 
 
-def _load(path: Path, doc: Any, quick: bool, engine: str | None) -> SweepSpec:
+def with_base(path: Path, _chain: tuple[Path, ...] = ()) -> tuple[Any, Path | None]:
+    """The spec document of ``path`` with its ``base:`` resolved, and the base's file.
+
+    ``base: NAME`` names a spec of the same folder (``NAME.yaml`` or ``NAME.yml``), itself
+    possibly a variant. The document is the base's (its ``name:`` aside) with the keys of
+    ``path`` replacing it; mappings under ``scenario`` are merged key by key.
+
+    Raises
+    ------
+    SpecError
+        Unreadable file, or a base that is not a name, is not in the folder, or leads back
+        to ``path`` (a cycle); the message names the file and the key.
+    """
+    try:
+        doc = read_yaml(path, "sweep spec")
+    except ValueError as exc:
+        raise SpecError(str(exc)) from None
+    doc = {} if doc is None else doc
+    if not isinstance(doc, Mapping) or "base" not in doc:
+        return doc, None
+    name = doc["base"]
+    folder = path.parent
+    if not isinstance(name, str) or not _LABEL.match(name):
+        raise SpecError(f"{path}: base: expected the name of a spec in the same folder "
+                        f"({folder}), got {name!r}")
+    found = [folder / f"{name}{ext}" for ext in (".yaml", ".yml")
+             if (folder / f"{name}{ext}").is_file()]
+    if not found:
+        known = sorted({q.stem for q in folder.glob("*.y*ml")} - {path.stem})
+        raise SpecError(f"{path}: base: unknown spec {name!r}; expected one of {known} "
+                        f"(in {folder})")
+    chain = (*_chain, path)
+    if any(found[0].resolve() == p.resolve() for p in chain):
+        cycle = " -> ".join(p.stem for p in (*chain, found[0]))
+        raise SpecError(f"{path}: base: {name!r} makes a cycle ({cycle})")
+    base_doc, _ = with_base(found[0], chain)
+    if not isinstance(base_doc, Mapping):
+        raise SpecError(f"{found[0]}: expected a mapping of spec keys")
+    merged = {k: v for k, v in base_doc.items() if k != "name"}
+    for key, value in doc.items():
+        if key != "base":
+            merged[key] = (_merged(merged[key], value) if key == "scenario" and key in merged
+                           else value)
+    return merged, found[0]
+
+
+def _merged(base: Any, over: Any) -> Any:
+    """``over`` merged into ``base``: mappings key by key, anything else replaced."""
+    if isinstance(base, Mapping) and isinstance(over, Mapping):
+        return {**base, **{k: _merged(base[k], v) if k in base else v
+                           for k, v in over.items()}}
+    return over
+
+
+def _load(path: Path, doc: Any, quick: bool, engine: str | None,
+          base: str = "") -> SweepSpec:
     """:func:`load_spec` of a parsed document; errors name the key, not the file."""
     expect_mapping(doc, "", TOP_KEYS)
     preset = preset_name(doc)
@@ -556,10 +687,12 @@ def _load(path: Path, doc: Any, quick: bool, engine: str | None) -> SweepSpec:
         raise ValueError("quick: missing: this spec has no quick form")
     if "quick" in doc and not quick:
         # Check the quick form too, so a spec is known good in both forms.
-        load_spec(path, quick=True)
+        _load(path, doc, True, None)
+    spec_engine = form.get("engine", "central")
     if engine is not None:
         form["engine"] = engine
-    return _resolve(name, path, quick, preset, form, qkeys)
+    return dataclasses.replace(_resolve(name, path, quick, preset, form, qkeys),
+                               spec_engine=spec_engine, base=base)
 
 
 def _load_spec_plugins(doc: Mapping[str, Any], base: Path) -> None:
@@ -570,6 +703,31 @@ def _load_spec_plugins(doc: Mapping[str, Any], base: Path) -> None:
         SystemConfig.from_dict({"plugins": system["plugins"]}, "scenario.system", base)
 
 
+def _scenario_doc(preset: str, scen: Mapping[str, Any], base_dir: Path) -> dict[str, Any]:
+    """The ``scenario_from_dict`` mapping of a spec's preset and ``scenario:`` overrides.
+
+    ``scenario.system`` replaces only what it names, as a method's block does: the
+    preset's other parts stay, and so do its options that the parts then take, so a spec
+    (or a variant) may set one option of, e.g., Sung & Tokekar's system without restating
+    it.
+    """
+    doc = {"preset": preset, **scen}
+    block = scen.get("system")
+    if not isinstance(block, Mapping):
+        return doc
+    preset_system = PRESETS[preset]().system
+    system = SystemConfig.from_dict(
+        {**{r: getattr(preset_system, r) for r in ROLES},
+         "plugins": list(preset_system.plugins), **block}, "scenario.system", base_dir)
+    given = dict(block.get("options") or {})
+    taken = dict(system.options)
+    doc["system"] = {
+        **{r: getattr(system, r) for r in ROLES}, "plugins": list(system.plugins),
+        "options": {**{k: v for k, v in preset_system.options if k in taken},
+                    **{k: taken[k] for k in given}}}
+    return doc
+
+
 def _resolve(name: str, path: Path, quick: bool, preset: str, form: dict[str, Any],
              qkeys: set[str]) -> SweepSpec:
     def key(k: str) -> str:
@@ -577,7 +735,7 @@ def _resolve(name: str, path: Path, quick: bool, preset: str, form: dict[str, An
 
     base_sc = PRESETS[preset]()
     scen = form.get("scenario", {})
-    base = scenario_from_dict({"preset": preset, **scen}, where="scenario",
+    base = scenario_from_dict(_scenario_doc(preset, scen, path.parent), where="scenario",
                               base_dir=path.parent)
     duration = form.get("duration", base.duration)
     try:
@@ -620,4 +778,4 @@ def _resolve(name: str, path: Path, quick: bool, preset: str, form: dict[str, An
 
 
 __all__ = ["ENGINES", "METRICS", "SpecError", "SweepSpec", "Trial", "config_hash", "find_spec",
-           "load_spec", "sweeps_dir"]
+           "later_options", "load_spec", "results_revisions", "sweeps_dir", "with_base"]

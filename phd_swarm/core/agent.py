@@ -156,18 +156,20 @@ class Agent:
 
     # --------------------------------------------------------------------- step
     def start_step(self, step: int, position: np.ndarray, z: np.ndarray, *,
-                   estimated: bool = False) -> list:
+                   labels: np.ndarray | None = None, estimated: bool = False) -> list:
         """Start ``step`` at ``position`` with measurement set ``z``; messages to send.
 
         The estimator predicts and takes the scan first (unless the exchange runs it, or
         ``estimated``: the caller has already stepped it with this scan, e.g. the
-        distributed engine with the estimator part's ``team_step``).
+        distributed engine with the estimator part's ``team_step``). ``labels``: the
+        target label of each measurement, from a sensor that identifies targets
+        (:attr:`phd_swarm.core.scan.Scan.labels`); None or empty when it gives none.
         """
         self.position = np.asarray(position, dtype=float)
         self.z = np.asarray(z, dtype=float).reshape(-1, 2)
         if self._runs_estimator and not estimated:
             self.estimator.predict()
-            self.estimator.update(Scan(self.robot_id, step, self.position, self.z))
+            self.estimator.update(Scan(self.robot_id, step, self.position, self.z, labels))
         return self.exchange.start_step(step, self.position, self.power_weight, self.z)
 
     def receive(self, msg: Any) -> bool:

@@ -47,6 +47,7 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
     "sensor": {
         "disk": "phd_swarm.core.sensors.disk",
         "disk_false_positive": "phd_swarm.core.sensors.disk_false_positive",
+        "disk_labelled": "phd_swarm.core.sensors.disk_labelled",
         "square_range_bearing": "phd_swarm.core.sensors.square_range_bearing",
     },
     "estimator": {

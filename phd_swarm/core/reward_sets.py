@@ -34,6 +34,12 @@ the earlier one is kept), so the rewards of two robots that meet are made equal 
 the sets in an order both robots agree on: increasing robot id
 (:meth:`phd_swarm.core.estimators.shirsat.ShirsatEstimator.merge_rewards`).
 
+**The labelled reading.** Eq. 19 makes a member a tuple <l, v>, l "a label for the tracked
+target, such as one of its properties, e.g. its color, shape, size or its position in the
+environment". :func:`union` reads the label as the position (the default); with a sensor
+that identifies the targets it detects, :func:`union_by_label` reads it as that identity:
+``x`` is in the set when its label is, and an estimate without a label is not added.
+
 Reference: A. Shirsat and S. Berman, "Decentralized multi-target tracking with multiple
 quadrotors using a PHD filter", AIAA SciTech 2021, eq. 6, Alg. 1-3.
 """
@@ -46,7 +52,7 @@ import numpy as np
 
 from .points import as_points
 
-__all__ = ["as_points", "extend", "union"]
+__all__ = ["as_labels", "as_points", "extend", "extend_by_label", "union", "union_by_label"]
 
 
 def _first_of_each_cluster(points: np.ndarray, d2: float) -> np.ndarray:
@@ -146,3 +152,76 @@ def _grow(kept: list[np.ndarray], sets: Sequence[np.ndarray], d2: float) -> list
             kept.append(pts)
             n_kept += len(pts)
     return kept
+
+
+def union_by_label(sets: Sequence[tuple[np.ndarray, np.ndarray]]
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The union of labelled sets <l, v> (eq. 19): one member per label, the first met.
+
+    The labelled reading of eq. 6 / Alg. 1 line d / Alg. 3, for a sensor that identifies
+    targets (:mod:`phd_swarm.core.sensors.disk_labelled`): ``x`` is in the set when its
+    label is, whatever its position. The members of all the sets are taken in order (as
+    :func:`union`), a member is kept unless its label was kept before, and a member without
+    a label (0: an estimate that no identified measurement formed,
+    :mod:`phd_swarm.core.estimators.shirsat_labels`) is not a member at all. So a kept
+    member is never replaced (its position stays the one first estimated) and the result
+    depends only on the order of the inputs.
+
+    Parameters
+    ----------
+    sets : sequence of (np.ndarray (K_i,) of int, np.ndarray (K_i, 2))
+        Labels (>= 0) and positions [m] of each set, taken in the order given.
+
+    Returns
+    -------
+    labels : np.ndarray of int64, shape (K,)
+        The kept labels, all > 0 and distinct, in the order they were met.
+    points : np.ndarray, shape (K, 2)
+        Their positions [m] (a new array).
+
+    Raises
+    ------
+    ValueError
+        If a set is malformed (naming it): labels not integers >= 0, or not one per point.
+    """
+    labels, points = [], []
+    for i, (lab, pts) in enumerate(sets):
+        pts = as_points(pts, f"sets[{i}]")
+        labels.append(as_labels(lab, len(pts), f"sets[{i}]"))
+        points.append(pts)
+    if not labels:
+        return np.empty(0, dtype=np.int64), np.empty((0, 2))
+    lab, pts = np.concatenate(labels), np.concatenate(points)
+    _, first = np.unique(lab, return_index=True)
+    keep = np.sort(first[lab[first] > 0])
+    return lab[keep], pts[keep]
+
+
+def extend_by_label(labels: np.ndarray, points: np.ndarray, new_labels: np.ndarray,
+                    new_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``union_by_label([(labels, points), (new_labels, new_points)])`` for a reduced set.
+
+    ``labels, points`` is a :func:`union_by_label` result (trusted); they are returned
+    themselves (not copies) when nothing is added, which is most steps.
+    """
+    new_labels = as_labels(new_labels, len(new_points), "new set")
+    if not np.any(new_labels[~np.isin(new_labels, labels)] > 0):
+        return labels, points
+    return union_by_label([(labels, points), (new_labels, new_points)])
+
+
+def as_labels(labels: np.ndarray, n: int, where: str) -> np.ndarray:
+    """``labels`` as int64 (n,), after checking they are integers >= 0, one per point.
+
+    Raises
+    ------
+    ValueError
+        Naming ``where``, if they are not.
+    """
+    lab = np.asarray(labels).reshape(-1)
+    if lab.size == 0 and n == 0:
+        return np.empty(0, dtype=np.int64)
+    if lab.shape[0] != n or not np.issubdtype(lab.dtype, np.integer) or lab.min() < 0:
+        raise ValueError(f"{where}: labels must be {n} integers >= 0 (one per point), got "
+                         f"{lab!r}")
+    return lab.astype(np.int64)

@@ -30,12 +30,17 @@ class Scan:
         Sensor position q [m], world frame.
     z : np.ndarray, shape (M, 2)
         Measured target positions [m], world frame; M may be 0.
+    labels : np.ndarray of int64, shape (M,) or (0,)
+        The target label of each measurement, 0 for none (clutter), from a sensor that
+        identifies targets (:mod:`phd_swarm.core.sensors.disk_labelled`); empty (the
+        default) when the sensor gives no labels.
     """
 
     robot_id: int
     step: int
     sensor: np.ndarray
     z: np.ndarray
+    labels: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         sensor = np.asarray(self.sensor, dtype=float).reshape(-1)[:2]
@@ -45,8 +50,16 @@ class Scan:
                              f"finite numbers, got {self.sensor!r}")
         if not np.isfinite(z).all():
             raise ValueError(f"scan of robot {self.robot_id}: measurements must be finite")
+        labels = np.empty(0, dtype=np.int64) if self.labels is None else self.labels
+        labels = np.asarray(labels).reshape(-1)
+        if labels.size and (labels.shape[0] != z.shape[0]
+                            or not np.issubdtype(labels.dtype, np.integer)
+                            or labels.min() < 0):
+            raise ValueError(f"scan of robot {self.robot_id}: labels must be {z.shape[0]} "
+                             f"integers >= 0 (one per measurement) or none, got {labels!r}")
         object.__setattr__(self, "sensor", sensor)
         object.__setattr__(self, "z", z)
+        object.__setattr__(self, "labels", labels.astype(np.int64))
 
     def wire_size(self) -> int:
         """Estimated CDR payload size of the ``MeasurementSet`` message [bytes]."""

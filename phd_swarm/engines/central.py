@@ -188,7 +188,7 @@ class CentralEngine:
         """Protocol counters: none (there is no protocol), for the engines' one interface."""
         return {}
 
-    def figures(self, truth: np.ndarray) -> dict[str, float]:
+    def figures(self, truth: np.ndarray, ids: np.ndarray | None = None) -> dict[str, float]:
         """No system-specific figures: the central form is the grid PHD's."""
         return {}
 

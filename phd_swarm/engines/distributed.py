@@ -40,9 +40,11 @@ envelopes dropped and delayed.
 
 from __future__ import annotations
 
+import inspect
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from itertools import groupby
+from typing import Any
 
 import numpy as np
 
@@ -223,15 +225,18 @@ class DistributedEngine:
         live = self.live_ids()
         extras = self.team.parts["estimator"].extras
         team_step = None if extras.get("runs_in_exchange") else extras.get("team_step")
+        # The labels of the scans, from a sensor that identifies targets (else none).
+        labels = self.world.scan_labels
         if team_step is not None:
             # The estimators of all live robots in one call (the estimator part's own
             # vectorised step, equal robot by robot to each robot's predict and update).
             team_step([self.agents[rid].estimator for rid in live],
-                      [Scan(rid, k, positions[rid], scans.get(rid, np.empty((0, 2))))
-                       for rid in live])
+                      [Scan(rid, k, positions[rid], scans.get(rid, np.empty((0, 2))),
+                            labels.get(rid)) for rid in live])
         for rid in live:
             z = scans.get(rid, np.empty((0, 2)))
             queue.extend(self.agents[rid].start_step(k, positions[rid], z,
+                                                     labels=labels.get(rid),
                                                      estimated=team_step is not None))
         if self.links is None:
             self._deliver(queue, traffic)
@@ -384,17 +389,27 @@ class DistributedEngine:
         return (np.concatenate(points) if points else np.empty((0, 2)),
                 float(sum(e.expected_count() for e in estimators)))
 
-    def figures(self, truth: np.ndarray) -> dict[str, float]:
+    def figures(self, truth: np.ndarray, ids: np.ndarray | None = None) -> dict[str, Any]:
         """The system's own per-step figures (its estimator's ``figures`` hook), or none.
 
         E.g. Sung & Tokekar's counts of components and tracks and Mahalanobis distances
-        (:mod:`phd_swarm.core.estimators.sung_figures`).
+        (:mod:`phd_swarm.core.estimators.sung_figures`). A hook that takes the keyword
+        ``ids`` is also given the true targets' ids (when known), and one that takes
+        ``controllers`` the live robots' controllers (e.g. Papaioannou et al.'s per-target
+        figures and overlap counts, :mod:`phd_swarm.core.estimators.papaioannou_figures`).
         """
         hook = self.team.parts["estimator"].extras.get("figures")
         if hook is None:
             return {}
-        estimators = [self.agents[rid].estimator for rid in self.live_ids()]
-        return hook(estimators, truth, self.scenario.ospa_c, self.scenario.ospa_p)
+        live = self.live_ids()
+        estimators = [self.agents[rid].estimator for rid in live]
+        takes = inspect.signature(hook).parameters
+        extra: dict[str, Any] = {}
+        if "ids" in takes and ids is not None:
+            extra["ids"] = ids
+        if "controllers" in takes:
+            extra["controllers"] = [self.agents[rid].controller for rid in live]
+        return hook(estimators, truth, self.scenario.ospa_c, self.scenario.ospa_p, **extra)
 
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx): the union of the live robots' bins."""

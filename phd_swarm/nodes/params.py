@@ -105,9 +105,30 @@ def declare_scenario(node: Node) -> Scenario:
         if p.type_ != Parameter.Type.NOT_SET:
             values[name] = list(p.value) if isinstance(p.value, (list, tuple)) else p.value
     try:
-        return scenario_from_dict(unflatten(values), where)
+        scenario = scenario_from_dict(unflatten(values), where)
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
+    refusal = ros_refusal(scenario.system)
+    if refusal:
+        raise ParameterError(f"{where}.system: {refusal}")
+    return scenario
+
+
+def ros_refusal(system: SystemConfig) -> str:
+    """Why the ROS stack cannot run ``system``, or "" if it can.
+
+    A sensor that identifies targets (``provides target_label``, e.g. ``disk_labelled``)
+    gives each measurement a label, which ``phd_swarm_msgs/MeasurementSet`` cannot carry
+    (nor ``RewardSet`` a reward member's): the labelled reading of Shirsat & Berman
+    (``reward_union: label``) runs on the in-memory engines only, so the nodes refuse it
+    rather than run the robots without the labels.
+    """
+    sensor = system.parts()["sensor"]
+    if "target_label" not in sensor.provides:
+        return ""
+    return (f"sensor {sensor.name} labels its measurements, which the ROS messages do not "
+            f"carry (MeasurementSet, RewardSet): the labelled reading (shirsat_gmphd "
+            f"reward_union: label) runs on the in-memory engines only (scripts/sweep.sh)")
 
 
 def _declare_system(node: Node, values: dict[str, Any]) -> SystemConfig:

@@ -35,6 +35,7 @@ from phd_swarm.core.params import (
     expect_str,
 )
 from phd_swarm.core.system import SystemConfig
+from phd_swarm.sim.ncv_paths import LIFETIME_MODELS
 from phd_swarm.sim.ncv_targets import NOISE_FORMS, SPAWNS
 from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
 
@@ -117,6 +118,10 @@ class TargetConfig:
         ``ncv``: q of the NCV model's Q [m^2/s^3] (Papaioannou Sec. VI-A: 1).
     noise_form : str
         ``ncv``: ``standard`` or ``printed`` Q (:func:`~phd_swarm.sim.ncv_targets.ncv_matrices`).
+    lifetime_model : str
+        ``ncv``: ``cut`` (a geometric lifetime cut by leaving E and by the run's end),
+        ``contained`` or ``exit`` (whole lives inside E and the run; ``spawn: uniform``
+        only; :mod:`~phd_swarm.sim.ncv_paths`).
     layout_seed : int or None
         ``static``: if set, the targets are drawn from a generator of this seed alone, so
         every run has the same targets whatever its own seed (Shirsat & Berman Sec. VI:
@@ -143,6 +148,7 @@ class TargetConfig:
     birth_spread: float = 0.0
     process_noise: float = 1.0
     noise_form: str = "standard"
+    lifetime_model: str = "cut"
 
     def __post_init__(self) -> None:
         expect_str(self.kind, "targets.kind", choices=TARGET_KINDS)
@@ -166,6 +172,10 @@ class TargetConfig:
         expect_number(self.birth_spread, "targets.birth_spread", low=0.0)
         expect_number(self.process_noise, "targets.process_noise", low=0.0)
         expect_str(self.noise_form, "targets.noise_form", choices=NOISE_FORMS)
+        expect_str(self.lifetime_model, "targets.lifetime_model", choices=LIFETIME_MODELS)
+        if self.lifetime_model != "cut" and self.spawn != "uniform":
+            raise ValueError(f"targets.lifetime_model: {self.lifetime_model} places whole "
+                             f"paths in the area and needs spawn: uniform")
         clusters = _boxes(self.clusters, "targets.clusters")
         object.__setattr__(self, "clusters", clusters)
         per = _counts(self.per_cluster, "targets.per_cluster")
@@ -531,7 +541,7 @@ _TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "step_sd": expect_number, "max_speed": expect_number, "turn_every": expect_number,
     "layout_seed": lambda v, path: None if v is None else expect_int(v, path, low=0),
     "spawn": expect_str, "lifetime_mean": expect_number, "birth_spread": expect_number,
-    "process_noise": expect_number, "noise_form": expect_str}
+    "process_noise": expect_number, "noise_form": expect_str, "lifetime_model": expect_str}
 
 _SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
     "name": expect_str, "resolution": expect_number, "dt": expect_number,

@@ -28,6 +28,7 @@ import numpy as np
 
 from phd_swarm.core.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
+from phd_swarm.sim.ncv_paths import NcvPaths, make_ncv_targets
 from phd_swarm.sim.ncv_targets import NcvTargets
 
 if TYPE_CHECKING:
@@ -571,7 +572,8 @@ class TurningWalkers:
         self._positions = _frozen(np.clip(nxt, self._lo, self._hi))
 
 
-Targets = StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers | NcvTargets
+Targets = (StaticTargets | DamesWalkers | ClusteredWalkers | TurningWalkers | NcvTargets
+           | NcvPaths)
 
 
 def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
@@ -581,7 +583,7 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
     instead, if set), ``dames_walk`` -> :meth:`DamesWalkers.sample`
     (with the filter's birth PHD ``scenario.models.birth`` when ``targets.birth``),
     ``clustered_walk`` -> :meth:`ClusteredWalkers.sample`, ``turning_walk`` ->
-    :meth:`TurningWalkers.sample`, ``ncv`` -> :meth:`~phd_swarm.sim.ncv_targets.NcvTargets.sample`.
+    :meth:`TurningWalkers.sample`, ``ncv`` -> :func:`~phd_swarm.sim.ncv_paths.make_ncv_targets`.
     """
     cfg = scenario.targets
     if cfg.kind == "static":
@@ -600,9 +602,5 @@ def make_targets(rng: np.random.Generator, scenario: Scenario) -> Targets:
         return TurningWalkers.sample(rng, scenario.env, cfg.count, cfg.draw_box, cfg.speed,
                                      cfg.turn_every)
     if cfg.kind == "ncv":
-        return NcvTargets.sample(rng, scenario.env, cfg.count, scenario.dt, spawn=cfg.spawn,
-                                 draw_box=cfg.draw_box, speed=cfg.speed,
-                                 lifetime_mean=cfg.lifetime_mean,
-                                 birth_spread=cfg.birth_spread, q=cfg.process_noise,
-                                 noise_form=cfg.noise_form)
+        return make_ncv_targets(rng, scenario)
     raise ValueError(f"unknown target kind {cfg.kind!r}")

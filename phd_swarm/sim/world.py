@@ -94,6 +94,11 @@ class World:
         self.step_index = 0
         sensor = scenario.system.parts()["sensor"]
         self._simulate = sensor.extras["simulate"]
+        # A sensor that identifies targets is handed their ids (disk_labelled).
+        self._simulate_labelled = sensor.extras.get("simulate_labelled")
+        #: Robot id -> the labels of its last scan, (M,) int64, 0 for clutter; filled only
+        #: by a sensor that identifies targets (:mod:`phd_swarm.core.sensors.disk_labelled`).
+        self.scan_labels: dict[int, np.ndarray] = {}
         #: What the sensor part's set-up made of the scenario (``disk``: its models).
         self._sensor_model = sensor.setup(scenario, scenario.system)
 
@@ -132,7 +137,9 @@ class World:
         Robots are visited in id order, each drawing from the sensor stream with
         the ``simulate`` of the scenario's sensor, given what the sensor part's set-up made
         (``disk``: :func:`~phd_swarm.core.sensors.disk.simulate_scan`, Dames eq. 9-11 with
-        ``scenario.models``). Dead robots get no entry and consume no random numbers.
+        ``scenario.models``). Dead robots get no entry and consume no random numbers. A
+        sensor that identifies targets (``simulate_labelled``) is also given the targets'
+        ids, and the labels of the scans are left in :attr:`scan_labels`.
 
         Returns
         -------
@@ -141,8 +148,15 @@ class World:
         """
         x = self.targets.positions
         simulate, model = self._simulate, self._sensor_model
-        return {int(r): simulate(self._sensor_rng, model, self._positions[r], x)
-                for r in np.flatnonzero(self._alive)}
+        if self._simulate_labelled is None:
+            return {int(r): simulate(self._sensor_rng, model, self._positions[r], x)
+                    for r in np.flatnonzero(self._alive)}
+        ids = self.targets.ids
+        out, self.scan_labels = {}, {}
+        for r in np.flatnonzero(self._alive):
+            out[int(r)], self.scan_labels[int(r)] = self._simulate_labelled(
+                self._sensor_rng, model, self._positions[r], x, ids)
+        return out
 
     def apply_goals(self, goals: Mapping[int, np.ndarray]) -> None:
         """Move each live robot towards its goal, at most ``robot_max_speed * dt`` (Chen eq. 3).

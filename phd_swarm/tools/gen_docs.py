@@ -162,6 +162,11 @@ SCENARIO_MEANINGS: dict[str, str] = {
                             "the start.",
     "targets.process_noise": "ncv: q of the NCV process noise [m^2/s^3] (Papaioannou: 1).",
     "targets.noise_form": "ncv: standard NCV Q, or the printed [[T/3, T/2], [T/2, T]].",
+    "targets.lifetime_model": "ncv: cut (a geometric lifetime cut by leaving the area and "
+                              "the run's end), contained (paths placed inside the area for "
+                              "a geometric lifetime of lifetime_mean, within the run) or exit "
+                              "(a target lives until it leaves the area, within the run); "
+                              "docs/decisions.md.",
     "targets.layout_seed": "static: if set, targets drawn from this seed alone, the same in "
                            "every run (Shirsat & Berman Table 1); unset: from the run's seed.",
     "extraction_threshold": "Target-extraction threshold as a density [targets/m^2]; the "

@@ -42,6 +42,7 @@ from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.completeness import Completeness
+from phd_swarm.nodes.params import ros_refusal
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.tools.dds import (
@@ -191,6 +192,9 @@ def resolve(opts: argparse.Namespace) -> RunConfig:
             scenario = scenario.with_system(controller=opts.controller)
     except ValueError as exc:
         raise ValueError(f"{opts.config}: command-line override: {exc}") from None
+    refusal = ros_refusal(scenario.system)
+    if refusal:
+        raise ValueError(f"{opts.config}: scenario.system: {refusal}")
     robot: dict[str, Any] = {}
     for option, param in (("drop", "fault_drop"), ("delay", "fault_delay"),
                           ("delay_rounds", "fault_delay_rounds"), ("fault_seed", "fault_seed")):

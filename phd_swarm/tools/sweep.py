@@ -1,7 +1,7 @@
 """Parameter sweeps: the papers' box plots, trial by trial.
 
 ``scripts/sweep.sh SPEC [--quick] [--workers N] [--engine E] [--out DIR] [--plot-only]
-[--dry-run]``
+[--dry-run] [--recheck N]``
 
 SPEC is a name under ``config/sweeps/`` or a path to a spec file
 (:mod:`phd_swarm.config.sweep_spec`). The specs in the repository reproduce Dames (2020)
@@ -20,7 +20,8 @@ c = 10 m, p = 1). A trial's result depends only on its scenario (seed included),
 controller and engine, never on the worker or the order.
 
 Outputs in ``<out>`` (default ``results/sweeps/<name>``, kept in git, or
-``runs/sweeps/<name>_quick``):
+``runs/sweeps/<name>_quick``; ``_<engine>`` appended when ``--engine`` is not the spec's
+own):
 
 - ``results.csv``: one row per finished trial (:data:`COLUMNS`), appended and flushed as
   each trial finishes. Running the same command again skips the trials already there; a
@@ -34,8 +35,9 @@ Outputs in ``<out>`` (default ``results/sweeps/<name>``, kept in git, or
   every session),
   and the plots and ``summary.csv`` / ``summary.md`` of :mod:`phd_swarm.tools.sweep_plots`.
 
-Exit codes: 0 done, 1 some trials failed (rerun to retry them), 2 bad spec or results that
-belong to another spec, 130 interrupted (finished rows are kept; rerun to resume).
+Exit codes: 0 done, 1 some trials failed (rerun to retry them) or a recheck failed, 2 bad
+spec or results that belong to another spec, 130 interrupted (finished rows are kept;
+rerun to resume).
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ from phd_swarm.config.sweep_spec import (
     load_spec,
 )
 from phd_swarm.engines import make_engine
+from phd_swarm.tools.series_arrays import pad_rows
 
 #: Columns of results.csv, in order.
 COLUMNS = ("spec", "trial", "method", "controller", "engine", "robots", "targets",
@@ -113,7 +116,9 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     row : dict
         The trial's results.csv row (:data:`COLUMNS`; ``spec`` left empty).
     series : dict of str to np.ndarray
-        Per-step arrays (:data:`SERIES`), shape (steps,); ``t = k dt`` [s].
+        Per-step arrays (:data:`SERIES`), shape (steps,); ``t = k dt`` [s]; and the
+        system's own figures, (steps,), or (steps, W) for one given as an array per step
+        (:mod:`phd_swarm.tools.series_arrays`).
     """
     from phd_swarm.core.scoring import score_estimates, score_step
 
@@ -124,8 +129,9 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     grid = "grid_density" in sc.system.parts()["estimator"].provides
     n = sc.steps
     s = {name: np.zeros(n) for name in SERIES}
+    wide: dict[str, list] = {}
     for k in range(n):
-        _, truth = engine.world.truth()
+        ids, truth = engine.world.truth()
         engine.step()
         if grid:
             score = score_step(sc.grid, engine.team_weights(), truth, sc.extraction,
@@ -135,9 +141,14 @@ def run_trial(trial: Trial) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         s["t"][k] = k * sc.dt
         for name, value in score.row().items():
             s[name][k] = value
-        # The system's own figures (e.g. Sung & Tokekar's tracks), saved with the series.
-        for name, value in engine.figures(truth).items():
-            s.setdefault(name, np.full(n, np.nan))[k] = value
+        # The system's own figures (e.g. Sung & Tokekar's tracks), saved with the series;
+        # an array per step (e.g. one entry per target) becomes a (steps, W) series.
+        for name, value in engine.figures(truth, ids).items():
+            if np.ndim(value):
+                wide.setdefault(name, [None] * n)[k] = value
+            else:
+                s.setdefault(name, np.full(n, np.nan))[k] = value
+    s.update({name: pad_rows(rows) for name, rows in wide.items()})
     ospa = s["ospa"]
     a, b = trial.window
     in_window = (s["t"] >= a - 1e-9) & (s["t"] <= b + 1e-9)
@@ -560,7 +571,9 @@ def default_out(spec: SweepSpec) -> Path:
     A full form writes to ``results/sweeps/<name>``, which is kept in git: the full forms
     take longer than one working session, so their rows are committed as they come and a
     later session (or another machine) resumes them. A quick form writes to
-    ``runs/sweeps/<name>_quick`` (not in git).
+    ``runs/sweeps/<name>_quick`` (not in git). Trials run on another engine than the
+    spec's own (``--engine``) write to a folder of their own, ``<name>_<engine>`` (or
+    ``<name>_quick_<engine>``).
     """
     root = os.environ.get("PHD_SWARM_ROOT")
     base = Path(root) if root else Path.cwd()
@@ -593,10 +606,13 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--recheck", type=int, default=0, metavar="N",
                    help="re-run the N cheapest finished trials (of different methods where "
                         "there are several) and compare every column but the timings with "
-                        "the stored rows; exit 1 if any differs")
+                        "the stored rows; exit 1 if any differs or fewer than N are "
+                        "finished")
     opts = p.parse_args(argv)
     if opts.workers < 1:
         p.error(f"--workers must be >= 1, got {opts.workers}")
+    if opts.recheck < 0:
+        p.error(f"--recheck must be >= 0, got {opts.recheck}")
     return opts
 
 
@@ -624,6 +640,11 @@ def main(argv: list[str] | None = None) -> int:
     if opts.dry_run:
         return 0
     if opts.recheck:
+        if len(done) < opts.recheck:
+            print(f"error: --recheck {opts.recheck}: {out} holds only {len(done)} finished "
+                  f"trial(s) of this spec, fewer than {opts.recheck} (is that the folder of "
+                  f"its rows? see --out and --engine)", file=sys.stderr)
+            return 1
         return 0 if recheck(done, results, opts.recheck) else 1
     from phd_swarm.tools.sweep_plots import write_report
 

@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.reward_sets import as_points, extend, union
+from phd_swarm.core.reward_sets import (
+    as_points,
+    extend,
+    extend_by_label,
+    union,
+    union_by_label,
+)
 
 
 def _reference(sets, distance):
@@ -126,3 +132,49 @@ def test_extend_with_nothing_new_returns_the_set_itself():
                                   [[1.0, 1.0]])
     with pytest.raises(ValueError, match="distance"):
         extend(reduced, [], -1.0)
+
+
+# ------------------------------------------------------------------- the labelled reading
+def test_union_by_label_keeps_the_first_member_of_each_label_wherever_it_lies():
+    a = ([3, 5], [[0.0, 0.0], [9.0, 9.0]])
+    b = ([5, 7, 3], [[0.1, 0.0], [0.2, 0.0], [50.0, 50.0]])
+    labels, points = union_by_label([a, b])
+    # Label 5 of b (0.1 m from a's label 3) is the same target as a's 5, 13 m away; label 7
+    # (0.2 m from a's label 3) is a new target: position plays no part.
+    np.testing.assert_array_equal(labels, [3, 5, 7])
+    np.testing.assert_array_equal(points, [[0.0, 0.0], [9.0, 9.0], [0.2, 0.0]])
+    labels, points = union_by_label([b, a])
+    np.testing.assert_array_equal(labels, [5, 7, 3])
+    np.testing.assert_array_equal(points, [[0.1, 0.0], [0.2, 0.0], [50.0, 50.0]])
+
+
+def test_members_without_a_label_are_not_added():
+    labels, points = union_by_label([([0, 2, 0, 2], [[1.0, 1.0], [2.0, 2.0], [3.0, 3.0],
+                                                     [4.0, 4.0]])])
+    np.testing.assert_array_equal(labels, [2])
+    np.testing.assert_array_equal(points, [[2.0, 2.0]])
+    labels, points = union_by_label([])
+    assert labels.shape == (0,) and labels.dtype == np.int64 and points.shape == (0, 2)
+    labels, points = union_by_label([([], np.empty((0, 2))), ([0], [[1.0, 1.0]])])
+    assert labels.shape == (0,) and points.shape == (0, 2)
+
+
+def test_extend_by_label_returns_the_set_itself_when_nothing_new_comes():
+    labels, points = union_by_label([([4, 9], [[0.0, 0.0], [1.0, 1.0]])])
+    same = extend_by_label(labels, points, np.array([9, 0]), np.array([[5.0, 5.0],
+                                                                       [6.0, 6.0]]))
+    assert same[0] is labels and same[1] is points
+    grown = extend_by_label(labels, points, np.array([0, 2]), np.array([[5.0, 5.0],
+                                                                        [6.0, 6.0]]))
+    np.testing.assert_array_equal(grown[0], [4, 9, 2])
+    np.testing.assert_array_equal(grown[1], [[0.0, 0.0], [1.0, 1.0], [6.0, 6.0]])
+
+
+@pytest.mark.parametrize("bad, match", [
+    ([([1], [[0.0, 0.0], [1.0, 1.0]])], r"sets\[0\]: labels must be 2 integers"),
+    ([([1], [[0.0, 0.0]]), ([-1], [[1.0, 1.0]])], r"sets\[1\]: labels must be 1 integers"),
+    ([([0.5], [[0.0, 0.0]])], r"sets\[0\]: labels must be 1 integers"),
+])
+def test_malformed_labelled_sets_are_refused_naming_them(bad, match):
+    with pytest.raises(ValueError, match=match):
+        union_by_label(bad)

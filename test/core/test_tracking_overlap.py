@@ -127,6 +127,24 @@ def test_threshold_is_a_sum_of_three_ospa_values_in_metres():
     assert mism.score == pytest.approx(10.0 / np.sqrt(3)) and not mism.detected()
 
 
+def test_the_mean_form_bounds_the_per_step_score():
+    # DeltaL = 0.36 m at every step (the smallest one-step score of the Fig. 5b runs): the
+    # sum, 1.08 m, never reaches Q_th = 0.9 m; the mean, 0.36 m, does.
+    win = OverlapWindow()
+    for k in range(3):
+        win.push(k, True, [[0.0, 0.0]], [[0.36, 0.0]])
+    assert win.score == pytest.approx(1.08)
+    assert not win.detected(0.9) and not win.detected(0.9, "sum")
+    assert win.detected(0.9, "mean") and not win.detected(0.35, "mean")
+    # A cardinality mismatch at one step still keeps the mean above Q_th (10 / sqrt(3) / 3).
+    mism = OverlapWindow()
+    for k, b in enumerate((SAME, SAME[:2], SAME)):
+        mism.push(k, True, SAME, b)
+    assert not mism.detected(0.9, "mean") and mism.detected(2.0, "mean")
+    with pytest.raises(ValueError, match="form"):
+        win.detected(0.9, "median")
+
+
 def test_decision_does_not_depend_on_the_cutoff_above_q_th_sqrt_n():
     rng = np.random.default_rng(19)
     fired = 0

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import csv
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from phd_swarm.core.controllers.sat_search_track import OverlapStep
 from phd_swarm.core.estimators.papaioannou_figures import step_figures
 from phd_swarm.tools import papaioannou_tables as pt
 from phd_swarm.tools.sweep import save_series
@@ -76,3 +78,67 @@ def test_step_figures_take_the_teams_best_search_value_and_gate_the_estimates():
     assert (f["agents_tracking"], f["targets_alive"], f["targets_tracked"]) == (2.0, 3.0, 2.0)
     empty = step_figures([], np.empty((0, 2)), 50.0, 2.0)
     assert np.isnan(empty["searched_area"]) and empty["targets_tracked"] == 0.0
+
+
+def test_per_target_readings_lifetimes_looks_and_overlaps_by_hand(tmp_path):
+    """Three targets over four steps, two agents (module docstring's readings)."""
+    pad = -1
+    series = {
+        "t": np.arange(4.0), "ospa": np.zeros(4), "searched_area": np.zeros(4),
+        "agents_tracking": np.zeros(4),
+        "targets_alive": np.array([2.0, 2.0, 1.0, 1.0]),
+        "targets_tracked": np.array([1.0, 0.0, 1.0, 0.0]),
+        "target_ids": np.array([[0, 1], [0, 1], [1, pad], [2, pad]]),
+        "target_trackers": np.array([[1, 0], [0, 0], [2, pad], [0, pad]]),
+        "target_in_view": np.array([[1, 0], [1, 2], [2, pad], [0, pad]]),
+        "agents_looking": np.array([1.0, 0.0, 0.0, 1.0]),
+        "overlap_tests": np.array([0.0, 1.0, 2.0, 0.0]),
+        "overlaps_fired": np.array([0.0, 0.0, 1.0, 0.0])}
+    v = pt.run_values(series, agents=2)
+    # Target 0: 1 of 2 steps tracked, 1: 1 of 3, 2: 0 of 1 and never in a square.
+    assert v["tracking_ratio"] == pytest.approx(2 / 6)
+    assert v["per_target_all"] == pytest.approx((1 / 2 + 1 / 3 + 0) / 3)
+    assert v["per_target_detected"] == pytest.approx((1 / 2 + 1 / 3) / 2)
+    assert v["per_target_tracked"] == pytest.approx((1 / 2 + 1 / 3) / 2)
+    assert (v["lifetime_mean"], v["targets_seen"]) == (2.0, 3.0)
+    assert v["bound_pooled"] == pytest.approx(
+        pt.tracking_ratio_bound(2, np.array([2, 3, 1])))
+    assert v["looks_pct"] == pytest.approx(100 * 2 / 8)
+    assert (v["overlap_tests"], v["overlaps_fired"]) == (3.0, 1.0)
+    # The series survive the npz round trip as integers, -1 padded.
+    save_series(tmp_path / "x.npz", series, "h")
+    back = pt.load_series(tmp_path / "x.npz")
+    assert back["target_ids"].dtype == np.int64
+    assert pt.run_values(back, agents=2) == pytest.approx(v)
+    old = pt.run_values({k: series[k] for k in ("t", "ospa", "searched_area",
+                                                "agents_tracking", "targets_alive",
+                                                "targets_tracked")}, agents=2)
+    assert np.isnan(old["per_target_all"]) and np.isnan(old["looks_pct"])
+
+
+class _Agent(_View):
+    """An estimator view with an id and a square of side 10 m at ``where``."""
+
+    def __init__(self, rid, where, estimates):
+        super().__init__([0.0], estimates)
+        self.robot_id = rid
+        self.sensor_position = np.asarray(where, dtype=float)
+        self.setup = SimpleNamespace(sensor=SimpleNamespace(
+            inside=lambda p, s: (np.abs(np.asarray(p) - s) <= 5.0).all(axis=1)))
+
+
+def test_step_figures_name_each_targets_trackers_and_the_agents_looking():
+    truth = np.array([[0.0, 0.0], [10.0, 0.0], [50.0, 50.0]])
+    views = [_Agent(0, [2.0, 0.0], [[1.0, 1.0]]), _Agent(3, [9.0, 2.0], [[12.0, 0.0],
+                                                                        [0.5, 0.0]])]
+    ctls = [SimpleNamespace(mode="look", overlap_step=OverlapStep(2, 1, 0.8)),
+            SimpleNamespace(mode="track", overlap_step=OverlapStep(1, 0, 0.5))]
+    f = step_figures(views, truth, 50.0, 2.0, ids=np.array([4, 7, 9]), controllers=ctls)
+    assert f["target_ids"].tolist() == [4, 7, 9]
+    assert f["target_trackers"].tolist() == [1 | 8, 8, 0]          # bits of agents 0 and 3
+    assert f["target_in_view"].tolist() == [1, 8, 0]
+    assert f["targets_tracked"] == 2.0
+    assert (f["agents_looking"], f["overlap_tests"], f["overlaps_fired"],
+            f["overlap_best"]) == (1.0, 3.0, 1.0, 0.5)
+    with pytest.raises(ValueError, match="ids"):
+        step_figures(views, truth, 50.0, 2.0, ids=np.array([1]))

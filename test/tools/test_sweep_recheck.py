@@ -27,3 +27,10 @@ def test_recheck_reruns_finished_rows_and_catches_a_changed_one(tmp_path, capsys
         w.writerows(rows)
     assert sweep.main([SPEC, "--quick", "--out", str(tmp_path), "--recheck", "2"]) == 1
     assert "DIFFERS in ospa_final" in capsys.readouterr().out
+
+
+def test_recheck_fails_naming_the_folder_when_too_few_rows_are_there(tmp_path, capsys):
+    # A recheck that finds nothing to compare (the wrong folder) must not pass.
+    assert sweep.main([SPEC, "--quick", "--out", str(tmp_path), "--recheck", "1"]) == 1
+    err = capsys.readouterr().err
+    assert f"--recheck 1: {tmp_path} holds only 0 finished trial(s)" in err

@@ -4,9 +4,10 @@ Registered as the ``sat_search_track`` controller. At the end of step k an agent
 chooses one of the 17 admissible moves of eq. 4 (:mod:`phd_swarm.core.agent_moves`):
 
 - **Mode** (Sec. III, V-C): tracking while its filter has targets (X^_k or a tentative
-  detection not empty, from the ``papaioannou_sat`` estimator's ``predicted_states``),
-  searching otherwise (always with ``track_targets: false``); an agent told to yield a tracking
-  overlap searches while its square still overlaps the other agent's.
+  detection not empty, from the ``papaioannou_sat`` estimator's ``track_states``; a step
+  tracking tentative detections only is a *look*), searching otherwise (always with
+  ``track_targets: false``); an agent told to yield a tracking overlap searches while its
+  square still overlaps the other agent's.
 - **Search** (Sec. V-B): it follows a plan over the unvisited nodes of its search map
   (p_v <= ``search_beta``): its own greedy least-cost path (the heuristic replacing P1), or,
   in a step at which it received other agents' maps (the exchange's event rule), the joint
@@ -20,9 +21,12 @@ chooses one of the 17 admissible moves of eq. 4 (:mod:`phd_swarm.core.agent_move
   each particle moved by F without noise, its weight times p_S (the agent's random
   generator is not spent on planning).
 - **Overlap** (Sec. V-C b): with every agent in range that also tracks, the squares' overlap
-  and eq. 19 on the exchanged predictions feed a 3-step window per pair
-  (:mod:`phd_swarm.core.tracking_overlap`); when it fires, the agent
+  and eq. 19 on the exchanged predicted multi-target states (the estimates only, the
+  estimator's ``predicted_states``) feed a 3-step window per pair
+  (:mod:`phd_swarm.core.tracking_overlap`); when it fires (the window's sum of DeltaL, or
+  with ``overlap_threshold_form: mean`` their mean, is <= Q_th), the agent
   :func:`~phd_swarm.core.tracking_overlap.pick_switcher` names switches to search.
+  :attr:`SatSearchTrack.overlap_step` says what the test did at the last decision.
 
 Reference: S. Papaioannou et al., "A cooperative multi-agent probabilistic framework for
 search and track missions", IEEE T-CNS, Sec. V-B, V-C.
@@ -47,7 +51,7 @@ from ..search_plan import (
     random_search_action,
     search_action,
 )
-from ..tracking_overlap import OverlapWindow, pick_switcher, squares_overlap
+from ..tracking_overlap import THRESHOLD_FORMS, OverlapWindow, pick_switcher, squares_overlap
 from .base import Controller, Decision, Knowledge
 
 OPTIONS = (
@@ -74,6 +78,9 @@ OPTIONS = (
               "overlaps (Sec. V-C b; Fig. 5b compares without)"),
     ParamSpec("overlap_threshold", 0.9, "sat_search_track: Q_th of the cumulative overlap "
               "score [m] (Sec. VI-A: 0.9)", low=0.0),
+    ParamSpec("overlap_threshold_form", "sum", "sat_search_track: Q_th bounds the sum of the "
+              "window's eq. 19 scores (sum, as printed) or their mean (mean: Q_th per step)",
+              choices=THRESHOLD_FORMS),
     ParamSpec("overlap_window", 3, "sat_search_track: steps of the overlap window (Sec. VI-A: "
               "3)", low=1),
     ParamSpec("overlap_cutoff", 10.0, "sat_search_track: OSPA cut-off c of eq. 19 [m] (not "
@@ -102,6 +109,8 @@ class SatControlSetup:
     overlap_window : int
     seed : int
         The run's seed (for the overlap's choice of who switches).
+    overlap_form : str
+        What Q_th bounds, ``sum`` or ``mean`` (:meth:`.OverlapWindow.detected`).
     """
 
     offsets: np.ndarray
@@ -116,6 +125,27 @@ class SatControlSetup:
     overlap_cutoff: float
     seed: int
     track_targets: bool = True
+    overlap_form: str = "sum"
+
+
+@dataclass(frozen=True)
+class OverlapStep:
+    """What the tracking-overlap test did at one decision of one agent.
+
+    Attributes
+    ----------
+    tested : int
+        Windows that were full and finite (every step's squares overlapped and both sets
+        were non-empty), i.e. compared with Q_th.
+    fired : int
+        Windows within Q_th (tracking overlaps detected).
+    best : float
+        The smallest Q [m] of the full windows (the sum of DeltaL), inf if none.
+    """
+
+    tested: int = 0
+    fired: int = 0
+    best: float = float("inf")
 
 
 class SatSearchTrack(Controller):
@@ -134,8 +164,14 @@ class SatSearchTrack(Controller):
         self._windows: dict[int, OverlapWindow] = {}
         #: Agents this one yielded a tracking overlap to (it searches while near them).
         self.yielding: set[int] = set()
-        self.stats = {"track_steps": 0, "search_steps": 0, "overlaps_resolved": 0,
-                      "plans": 0, "joint_plans": 0}
+        #: The last decision's mode: ``search``, ``track``, or ``look`` (tracking tentative
+        #: detections only).
+        self.mode = "search"
+        #: What the tracking-overlap test did at the last decision.
+        self.overlap_step = OverlapStep()
+        self.stats = {"track_steps": 0, "search_steps": 0, "look_steps": 0,
+                      "overlap_tests": 0, "overlaps_resolved": 0, "plans": 0,
+                      "joint_plans": 0}
 
     def decide(self, knowledge: Knowledge, rng: np.random.Generator) -> Decision:
         """The move of step k+1 (see the module docstring)."""
@@ -146,18 +182,23 @@ class SatSearchTrack(Controller):
         side = s.tracking.side
         position = np.asarray(knowledge.position, dtype=float).reshape(2)
         predicted = est.predicted_states()
+        targets = est.track_states() if hasattr(est, "track_states") else predicted
+        self.overlap_step = OverlapStep()
         if s.overlap:
             self._overlaps(knowledge.step, position, predicted[:, :2], messages, side)
         self.yielding = {j for j in self.yielding if j in messages
                          and squares_overlap(position, messages[j].position, side)}
         positions, admissible = admissible_positions(position, s.offsets, s.bounds)
-        if len(predicted) and not self.yielding and s.track_targets:
-            action = self._track(est, predicted, positions, admissible)
+        if len(targets) and not self.yielding and s.track_targets:
+            action = self._track(est, targets, positions, admissible)
             self.tracking = True
+            self.mode = "track" if len(predicted) else "look"
             self.stats["track_steps"] += 1
+            self.stats["look_steps"] += self.mode == "look"
         else:
             action = self._search(est, view, position, positions, admissible, rng)
             self.tracking = False
+            self.mode = "search"
             self.stats["search_steps"] += 1
         self.goal = positions[action].copy()
         return Decision(goal=self.goal.copy(), power_weight=0.0)
@@ -223,18 +264,27 @@ class SatSearchTrack(Controller):
         if not self.tracking:
             self._windows.clear()
             return
+        tested, fired, best = 0, 0, float("inf")
         for j, m in messages.items():
             if not m.tracking:
                 self._windows.pop(j, None)
                 continue
             window = self._windows.setdefault(j, OverlapWindow(s.overlap_window,
                                                                s.overlap_cutoff))
-            window.push(step, squares_overlap(position, m.position, side), mine, m.predicted)
-            if window.detected(s.overlap_threshold):
+            q = window.push(step, squares_overlap(position, m.position, side), mine,
+                            m.predicted)
+            if q is None or not np.isfinite(q):
+                continue
+            tested += 1
+            best = min(best, q)
+            if window.detected(s.overlap_threshold, s.overlap_form):
                 window.reset()
-                self.stats["overlaps_resolved"] += 1
+                fired += 1
                 if pick_switcher(s.seed, step, self.robot_id, j) == self.robot_id:
                     self.yielding.add(j)
+        self.overlap_step = OverlapStep(tested, fired, best)
+        self.stats["overlap_tests"] += tested
+        self.stats["overlaps_resolved"] += fired
 
     def planned_path(self) -> np.ndarray:
         """The next move's goal, then (searching) the plan's remaining nodes, (P, 2) [m]."""
@@ -267,7 +317,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SatControlSetup:
         opt["search_mode"] == "random", str(opt["alg1_first"]),
         bool(opt["overlap_detection"]), float(opt["overlap_threshold"]),
         int(opt["overlap_window"]), float(opt["overlap_cutoff"]), int(scenario.seed),
-        bool(opt["track_targets"]))
+        bool(opt["track_targets"]), str(opt["overlap_threshold_form"]))
 
 
 registry.register(

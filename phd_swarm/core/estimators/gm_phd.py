@@ -7,8 +7,8 @@ the PHD recursion keeps that form (Vo & Ma 2006, Propositions 1-2). This module 
 - :class:`GmPhdModel`: the models and the reduction settings (frozen, validated);
 - :class:`GaussianMixture`: the intensity as plain arrays;
 - :func:`predict` (Table I steps 1-2), :func:`update` (Table I steps 3-4, with a detection
-  probability per component), :func:`prune_and_merge` (Table II), :func:`extract`
-  (Table III);
+  probability per component), :func:`prune_and_merge` (Table II, its arithmetic in
+  :mod:`.gm_reduce`), :func:`extract` (Table III);
 - :func:`linear_terms` and :func:`update_with_terms`: the update split in two, so that a
   nonlinear measurement model (:mod:`.range_bearing`) only supplies the Kalman terms.
 
@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .checks import check_finite, check_measurements, check_probability, check_spd
+from .gm_reduce import check_merge_metric, reduce_components
 
 #: p_D evaluator: (means (J, d), covs (J, d, d), sensor position (2,) [m]) -> p_D (J,).
 DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -146,6 +147,9 @@ class GmPhdModel:
         T of Table II: components with weight <= T are dropped [-].
     merge_threshold : float
         U of Table II: Mahalanobis (squared) distance within which components merge [-].
+    merge_metric : {"candidate", "heaviest"}
+        Whose covariance U is measured in (:mod:`.gm_reduce`): each candidate's, as Table II
+        prints it, or the heaviest component's, as Vo's MATLAB ``gaus_merge.m``.
     max_components : int
         J_max of Table II.
     extraction_threshold : float
@@ -172,6 +176,10 @@ class GmPhdModel:
     clutter_intensity: float
     prune_threshold: float = 1e-5
     merge_threshold: float = 4.0
+    # The library default is to be chosen by measurement on `scripts/bench.sh estimators`
+    # scenarios A and B (issue 33); until then today's rule. The Sung & Tokekar and
+    # Shirsat & Berman parts default to "heaviest" (docs/decisions.md).
+    merge_metric: str = "candidate"
     max_components: int = 100
     extraction_threshold: float = 0.5
     spawn_weights: np.ndarray | None = None
@@ -242,6 +250,7 @@ class GmPhdModel:
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
             object.__setattr__(self, name, v)
         object.__setattr__(self, "p_s", float(self.p_s))
+        check_merge_metric(self.merge_metric)
         if int(self.max_components) != self.max_components or self.max_components < 1:
             raise ValueError(f"max_components must be an integer >= 1, got "
                              f"{self.max_components!r}")
@@ -482,27 +491,25 @@ def _logsumexp_rows(a: np.ndarray) -> np.ndarray:
         return shift + np.log(np.exp(a - shift[:, None]).sum(axis=1))
 
 
-#: Up to this many components (after pruning) the merge distances of all pairs are
-#: computed at once, (J, J) of them; above it, one column per group (memory ~ J d^2).
-_PAIRWISE_MAX = 256
-
-
 def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
     """Pruning, merging and capping of the mixture (Vo & Ma Table II).
 
     Components with weight <= T are dropped (their mass is not redistributed, as in the
-    paper). Then, repeatedly, the heaviest remaining component j and every remaining i with
-    ``(m_i - m_j)^T P_i^-1 (m_i - m_j) <= U`` merge into one with the summed weight, the
-    weighted mean and the moment-matched covariance
-    ``sum_i w_i (P_i + (m - m_i)(m - m_i)^T) / w``. If more than J_max components remain,
-    the J_max heaviest are kept.
+    paper). Then, repeatedly, the heaviest remaining component j and every remaining i
+    within U of it merge into one with the summed weight, the weighted mean and the
+    moment-matched covariance ``sum_i w_i (P_i + (m - m_i)(m - m_i)^T) / w``; "within U" is
+    ``(m_i - m_j)^T P_i^-1 (m_i - m_j) <= U`` (``merge_metric = candidate``, Table II as
+    printed) or ``(m_i - m_j)^T P_j^-1 (m_i - m_j) <= U`` (``heaviest``, Vo's MATLAB
+    ``gaus_merge.m``). If more than J_max components remain, the J_max heaviest are kept.
+    The arithmetic is :func:`.gm_reduce.reduce_components`'s.
 
     Parameters
     ----------
     mix : GaussianMixture
         J components of dimension d.
     model : GmPhdModel
-        T (``prune_threshold``), U (``merge_threshold``), J_max (``max_components``).
+        T (``prune_threshold``), U (``merge_threshold``), J_max (``max_components``),
+        ``merge_metric``.
 
     Returns
     -------
@@ -510,68 +517,9 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
         At most J_max components, heaviest first.
     """
     _check_mixture(mix, model)
-    keep = mix.weights > model.prune_threshold
-    w, m, p = mix.weights[keep], mix.means[keep], mix.covs[keep]
-    if w.size == 0:
-        return GaussianMixture.empty(model.dim)
-    # Greedy grouping: the heaviest component not yet taken (ties to the lowest index, as
-    # argmax) takes every remaining i within U of it, in the metric of P_i. Only the group
-    # labels are found in this loop, one cheap pass per group over all J; the moments of
-    # all groups are then computed at once.
-    p_inv = np.linalg.inv(p)
-    n = w.size
-    labels = np.full(n, -1)
-    taken = np.zeros(n, dtype=bool)
-    n_groups = 0
-    order = np.argsort(-w, kind="stable")
-    close = None
-    if n <= _PAIRWISE_MAX:
-        # All pairs at once, close[i, j] = (m_i - m_j)^T P_i^-1 (m_i - m_j) <= U; when no
-        # two components are close (most steps of a search, far from the sensor) every
-        # component is its own group, in weight order, and the loop is skipped.
-        diff = m[:, None, :] - m[None, :, :]
-        close = np.einsum("ijd,ide,ije->ij", diff, p_inv, diff) <= model.merge_threshold
-        if np.count_nonzero(close) == n:
-            return _singletons(w, m, p, order[:model.max_components])
-    for j in order:
-        if taken[j]:
-            continue
-        if close is None:
-            diff = m - m[j]
-            dist = np.einsum("ni,nik,nk->n", diff, p_inv, diff)
-            group = (dist <= model.merge_threshold) & ~taken
-        else:
-            group = close[:, j] & ~taken
-        group[j] = True
-        labels[group] = n_groups
-        taken |= group
-        n_groups += 1
-    by_group = np.argsort(labels, kind="stable")
-    starts = np.searchsorted(labels[by_group], np.arange(n_groups))
-    wg, mg, pg = w[by_group], m[by_group], p[by_group]
-    w_sum = np.add.reduceat(wg, starts)
-    mean = np.add.reduceat(wg[:, None] * mg, starts) / w_sum[:, None]
-    dm = mean[labels[by_group]] - mg
-    spread = wg[:, None, None] * (pg + dm[:, :, None] * dm[:, None, :])
-    cov = np.add.reduceat(spread, starts) / w_sum[:, None, None]
-    cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
-    order = np.argsort(-w_sum, kind="stable")[:model.max_components]
-    return GaussianMixture(w_sum[order], mean[order], cov[order])
-
-
-def _singletons(w: np.ndarray, m: np.ndarray, p: np.ndarray,
-                order: np.ndarray) -> GaussianMixture:
-    """:func:`prune_and_merge`'s result when every component is its own group.
-
-    The same arithmetic as the general path on groups of one (``(w m) / w``, the
-    moment-matched covariance, the symmetrisation), bit for bit, without the grouping:
-    ``order`` is the components by decreasing weight (stable), capped at J_max.
-    """
-    wg, mg, pg = w[order], m[order], p[order]
-    mean = (wg[:, None] * mg) / wg[:, None]
-    dm = mean - mg
-    cov = wg[:, None, None] * (pg + dm[:, :, None] * dm[:, None, :]) / wg[:, None, None]
-    return GaussianMixture(wg, mean, 0.5 * (cov + np.swapaxes(cov, -1, -2)))
+    return GaussianMixture(*reduce_components(
+        mix.weights, mix.means, mix.covs, model.prune_threshold, model.merge_threshold,
+        model.max_components, model.merge_metric))
 
 
 def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:

@@ -14,10 +14,10 @@ batch (a numpy ``sum`` over a padded axis would group its terms by the padded le
 bit for bit.
 
 **Equal to :mod:`.gm_phd`.** :func:`prune_and_merge_rows` is Vo & Ma's Table II exactly as
-:func:`.gm_phd.prune_and_merge` computes it, bit for bit, with one exception: the merge
-test's squared Mahalanobis distance is written out elementwise
-(``dx A00 dx + dx A01 dy + dy A10 dx + dy A11 dy``, left to right, A = P_i^-1 from
-LAPACK),
+:func:`.gm_phd.prune_and_merge` computes it, under either merge metric, bit for bit, with
+one exception: the merge test's squared Mahalanobis distance is written out elementwise
+(``dx A00 dx + dx A01 dy + dy A10 dx + dy A11 dy``, left to right, A = P_i^-1 or P_j^-1
+from LAPACK),
 where :func:`.gm_phd.prune_and_merge` lets ``einsum`` choose an order that depends on the
 number of components. The two distances differ at most in the last bit, so a merge
 decision differs only for a distance within a rounding error of U. The group sums
@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .gm_phd import GaussianMixture
+from .gm_reduce import check_merge_metric
 
 __all__ = ["PaddedMixtures", "predict_rows", "prune_and_merge_rows"]
 
@@ -134,32 +135,43 @@ def predict_rows(mixes: PaddedMixtures, f: np.ndarray, q: np.ndarray,
 
 
 def prune_and_merge_rows(mixes: PaddedMixtures, prune: float, merge: float,
-                         cap: int) -> list[GaussianMixture]:
+                         cap: int, metric: str = "candidate", *, with_leads: bool = False
+                         ) -> list[GaussianMixture] | tuple[list[GaussianMixture],
+                                                            list[np.ndarray]]:
     """Vo & Ma Table II for every row: :func:`.gm_phd.prune_and_merge` (see the module docstring).
 
     Components with weight <= ``prune`` are dropped; then, repeatedly, the heaviest
     remaining component j of a row (ties to the lowest index) and every remaining i of the
-    row with ``(m_i - m_j)^T P_i^-1 (m_i - m_j) <= merge`` become one component with the
+    row with ``(m_i - m_j)^T A (m_i - m_j) <= merge`` become one component with the
     summed weight, the weighted mean and the moment-matched covariance; the ``cap``
-    heaviest groups are kept, heaviest first.
+    heaviest groups are kept, heaviest first. A is P_i^-1 (``metric = candidate``, Table II
+    as printed) or P_j^-1 (``heaviest``, Vo's ``gaus_merge.m``; :mod:`.gm_reduce`).
 
     Returns
     -------
     list of GaussianMixture
         One per row.
+    list of np.ndarray of int64, only with ``with_leads``
+        Per row, the slot (index in the row of ``mixes``) of each output component's lead,
+        the heaviest component of its group (what a label carried by the components
+        follows: :mod:`.shirsat_labels`).
     """
+    check_merge_metric(metric)
     rows, width = mixes.weights.shape
     keep = mixes.valid & (mixes.weights > prune)
     if not keep.any():
-        return [GaussianMixture.empty(2) for _ in range(rows)]
+        empty = [GaussianMixture.empty(2) for _ in range(rows)]
+        return (empty, [np.empty(0, dtype=np.int64)] * rows) if with_leads else empty
     w, m, p = mixes.weights, mixes.means, mixes.covs
-    # Squared Mahalanobis distance of component i from component j in the metric of P_i,
-    # close[r, i, j]; dropped and padding slots are never close to anything.
+    # Squared Mahalanobis distance of component i from component j in the metric of P_i
+    # (candidate) or P_j (heaviest), close[r, i, j]; dropped and padding slots are never
+    # close to anything.
     a = np.linalg.inv(np.where(keep[..., None, None], p, np.eye(2)))
+    a = a[:, :, None] if metric == "candidate" else a[:, None, :]
     dx = m[:, :, None, 0] - m[:, None, :, 0]                  # (R, i, j)
     dy = m[:, :, None, 1] - m[:, None, :, 1]
-    a00, a01 = a[:, :, None, 0, 0], a[:, :, None, 0, 1]
-    a10, a11 = a[:, :, None, 1, 0], a[:, :, None, 1, 1]
+    a00, a01 = a[..., 0, 0], a[..., 0, 1]
+    a10, a11 = a[..., 1, 0], a[..., 1, 1]
     dist = dx * a00 * dx + dx * a01 * dy + dy * a10 * dx + dy * a11 * dy
     close = (dist <= merge) & keep[:, :, None] & keep[:, None, :]
     # Greedy grouping, every row at once: each round, the heaviest component not yet
@@ -169,6 +181,7 @@ def prune_and_merge_rows(mixes: PaddedMixtures, prune: float, merge: float,
     free = np.where(keep, w, -np.inf)
     everyone = np.arange(rows)
     n_groups = np.zeros(rows, dtype=np.int64)
+    lead_slot = np.full((rows, width), -1, dtype=np.int64)
     while True:
         live = np.flatnonzero(free.max(axis=1) > -np.inf)
         if not live.size:
@@ -178,6 +191,7 @@ def prune_and_merge_rows(mixes: PaddedMixtures, prune: float, merge: float,
         group[np.arange(live.size), lead] = True
         labels[live] = np.where(group, n_groups[live, None], labels[live])
         free[live] = np.where(group, -np.inf, free[live])
+        lead_slot[live, n_groups[live]] = lead
         n_groups[live] += 1
     # Members in group order, the components of a group in index order (a stable sort of
     # the labels within each row, as gm_phd's argsort), rows one after another.
@@ -198,15 +212,16 @@ def prune_and_merge_rows(mixes: PaddedMixtures, prune: float, merge: float,
     cov = _reduceat_sums(spread, first, sizes) / w_sum[:, None, None]
     cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
     # Heaviest first within each row (stable), capped; groups are numbered per row.
-    out = []
+    out, leads = [], []
     start = 0
     for r in range(rows):
         g = int(n_groups[r])
         ws = w_sum[start:start + g]
         order = np.argsort(-ws, kind="stable")[:cap] + start
         out.append(GaussianMixture(w_sum[order], mean[order], cov[order]))
+        leads.append(lead_slot[r, order - start])
         start += g
-    return out
+    return (out, leads) if with_leads else out
 
 
 def _reduceat_sums(x: np.ndarray, first: np.ndarray, sizes: np.ndarray) -> np.ndarray:

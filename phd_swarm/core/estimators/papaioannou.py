@@ -25,8 +25,11 @@ propagates the searching-and-tracking (SAT) density of Sec. V-A, which has two p
   set to 1 inside the current one; the exchange max-merges the values of the agents met
   (:meth:`PapaioannouEstimator.merge_search`).
 
-The controller reads the particles, the estimates and their one-step prediction
-(:meth:`PapaioannouEstimator.predicted_states`) and the search values.
+The controller reads the particles, the search values and two one-step predictions: the
+predicted multi-target state X^_{k+1|k} (:meth:`PapaioannouEstimator.predicted_states`, the
+estimates only), which the agents exchange and compare by eq. 19, and the states it tracks
+(:meth:`PapaioannouEstimator.track_states`: those and, with ``look_tentative``, the first
+detections it looks at again).
 
 Reference: S. Papaioannou et al., "A cooperative multi-agent probabilistic framework for
 search and track missions", IEEE T-CNS, Sec. V-A, VI-A.
@@ -57,6 +60,11 @@ from .smc_phd import (
     resample,
     update,
 )
+
+#: Results revision of the parts this module registers (:func:`phd_swarm.config.sweep_spec.
+#: results_revisions`). 2: ``predicted_states`` no longer holds the tentative detections, so
+#: the exchanged sets that eq. 19 compares are the estimates only (issue 33).
+RESULTS_REVISION = 2
 
 #: Stream of the estimators' own generators (particles), apart from the robots' and the
 #: world's (``SeedSequence(seed, spawn_key=(ESTIMATOR_STREAM, robot_id))``).
@@ -89,10 +97,10 @@ OPTIONS = (
               "an estimate at once); square: round(mass in the sensing square) estimates by "
               "k-means there (Sec. V-A)",
               choices=("all", "persistent", "square")),
-    ParamSpec("look_tentative", True, "papaioannou_sat: a measurement whose particles, births "
-              "included, took weight > 0.5 but that is not an estimate yet is handed to the "
-              "controller with the predicted estimates, so the agent tracks it and looks again "
-              "(false: the controller sees the estimates only)"),
+    ParamSpec("look_tentative", True, "papaioannou_sat: the look rule: a measurement whose "
+              "particles, births included, took weight > 0.5 but that is not an estimate yet "
+              "is handed to the controller with the predicted estimates, so the agent tracks "
+              "it and looks again (false: no looks, the controller sees the estimates only)"),
     ParamSpec("hold_gate", 5.0, "papaioannou_sat: an estimate no measurement renews is "
               "kept, moved to the particles within this distance [m] of its prediction, while "
               "their weight exceeds 0.5 (0: estimates only from this step's measurements)",
@@ -331,12 +339,26 @@ class PapaioannouEstimator(Estimator):
         return self._tentative.copy()
 
     def predicted_states(self) -> np.ndarray:
-        """X^_{k+1|k}, the mean prediction the controller tracks (K + T, 4).
+        """X^_{k+1|k}, the predicted multi-target state (K, 4): the estimates moved by F.
+
+        The mean prediction (no noise). This is the set the agents exchange and that eq. 19
+        compares (Sec. V-C b: "the predicted multi-target states"); the tentative
+        detections are not in it (:meth:`track_states`).
+        """
+        return self._states @ self.setup.f.T
+
+    def track_states(self) -> np.ndarray:
+        """What the controller tracks at k+1 (K + T, 4): X^_{k+1|k} and the predicted looks.
 
         The estimates and, with ``look_tentative``, the tentative detections, moved by F
-        without noise.
+        without noise; the agent is in tracking mode while this is not empty.
         """
         return np.concatenate([self._states, self._tentative]) @ self.setup.f.T
+
+    @property
+    def sensor_position(self) -> np.ndarray | None:
+        """s_k, where the last scan was taken (2,) [m]; None before the first."""
+        return None if self._position is None else self._position.copy()
 
     def expected_count(self) -> float:
         """The particles' total weight (the PHD's mass)."""

@@ -28,7 +28,12 @@ robots that meet merge (eq. 6, Alg. 2-3; the ``meet_merge`` exchange calls
 6. the reward: ``M_k = M_{k-1} U X^_k`` (Alg. 1 d), a union in which a point within
    ``duplicate_distance`` of a point already in the set is the same target
    (:func:`phd_swarm.core.reward_sets.union`; an exact union of real-valued estimates would
-   add every target again at every step).
+   add every target again at every step). With ``reward_union: label`` and a sensor that
+   identifies targets (``sensor: disk_labelled``), the labelled reading of eq. 19 instead:
+   each estimate carries the label of the measurement that formed it
+   (:mod:`.shirsat_labels`), the union is by label
+   (:func:`phd_swarm.core.reward_sets.union_by_label`) and an estimate without a label
+   (from clutter) is not added.
 
 The default ``duplicate_distance``, 1.5 m, is three measurement standard deviations of the
 paper's sensor (R = 0.25 I_2, sd 0.5 m), the usual 3-sigma gate. With p_S = 0.1 the filter
@@ -61,15 +66,24 @@ import numpy as np
 
 from .. import registry
 from ..params import ParamSpec
-from ..reward_sets import as_points, extend, union
+from ..reward_sets import (
+    as_labels,
+    as_points,
+    extend,
+    extend_by_label,
+    union,
+    union_by_label,
+)
 from ..scan import Scan
 from .base import Estimator
 from .checks import check_measurements
 from .detection import DiskFov
 from .gm_births import RingBirth
 from .gm_phd import GaussianMixture, GmPhdModel, extract, linear_terms, update_with_terms
+from .gm_reduce import MERGE_METRIC_OPTION
 from .gm_team import PaddedMixtures, predict_rows, prune_and_merge_rows
 from .shirsat_figures import step_figures
+from .shirsat_labels import estimate_labels, measurement_labels, posterior_labels
 
 OPTIONS = (
     ParamSpec("survival_probability", 0.1, "shirsat_gmphd: p_S, applied to every component "
@@ -92,6 +106,7 @@ OPTIONS = (
               "Vo & Ma Table II)", low=0.0),
     ParamSpec("merging_distance", 4.0, "shirsat_gmphd: merging threshold U on the squared "
               "Mahalanobis distance (Sec. VI: 4; Vo & Ma Table II)", low=0.0),
+    MERGE_METRIC_OPTION,
     ParamSpec("component_cap", 100, "shirsat_gmphd: J_max, the most components kept (Vo & "
               "Ma Table II; not stated in the paper)", low=1),
     ParamSpec("extraction_weight", 0.5, "shirsat_gmphd: weight above which a component gives "
@@ -101,6 +116,11 @@ OPTIONS = (
               "within this distance of a point of the set is the same target [m] (default: "
               "3 measurement sds of Sec. VI's sensor; the paper's exact union never matches "
               "a real-valued estimate)", low=0.0),
+    ParamSpec("reward_union", "position", "shirsat_gmphd: reward-set union: an estimate is "
+              "in the set when it lies within duplicate_distance of a member (position) or "
+              "when its label is (label: eq. 19's <l, v> with a sensor that identifies "
+              "targets, e.g. disk_labelled; estimates from clutter carry none and are not "
+              "added)", choices=("position", "label")),
 )
 
 
@@ -121,6 +141,9 @@ class ShirsatSetup:
         kappa(z) = lambda_C inside the FoV disk and 0 outside (True), or lambda_C everywhere.
     duplicate_distance : float
         The reward-set union's distance [m] (:func:`phd_swarm.core.reward_sets.union`).
+    labelled : bool
+        The union is by label (:func:`phd_swarm.core.reward_sets.union_by_label`), the
+        components carrying labels (:mod:`.shirsat_labels`); else by position.
     """
 
     model: GmPhdModel
@@ -128,6 +151,7 @@ class ShirsatSetup:
     birth: RingBirth
     clutter_in_fov_only: bool = True
     duplicate_distance: float = 1.5
+    labelled: bool = False
 
     def clutter(self, z: np.ndarray, sensor: np.ndarray) -> np.ndarray:
         """kappa(z) [1/m^2] at each measurement (M,) for a scan taken at ``sensor``."""
@@ -164,13 +188,14 @@ def make_setup(radius: float, p_d: float, variance: float, clutter: float,
         birth_covs=np.empty((0, 2, 2)), clutter_intensity=float(clutter),
         prune_threshold=float(opt["pruning_weight"]),
         merge_threshold=float(opt["merging_distance"]),
+        merge_metric=str(opt["merge_metric"]),
         max_components=int(opt["component_cap"]),
         extraction_threshold=float(opt["extraction_weight"]))
     fov = DiskFov(float(radius), float(p_d), integrate=opt["p_d_evaluation"] == "integrated")
     birth = RingBirth(float(opt["birth_radius_ratio"]) * float(radius),
                       float(opt["birth_weight"]), max(float(opt["birth_variance"]), 1e-12))
     return ShirsatSetup(model, fov, birth, opt["clutter_region"] == "fov",
-                        float(opt["duplicate_distance"]))
+                        float(opt["duplicate_distance"]), opt["reward_union"] == "label")
 
 
 class ShirsatEstimator(Estimator):
@@ -203,9 +228,19 @@ class ShirsatEstimator(Estimator):
                              f"(positions)")
         self._estimates = np.empty((0, 2))
         self._reward = np.empty((0, 2))
+        # The labelled reading's bookkeeping (setup.labelled; :mod:`.shirsat_labels`): the
+        # components', the estimates' and the reward members' labels, 0 for none.
+        self._labels = np.zeros(len(self._mixture), dtype=np.int64)
+        self._estimate_labels = np.empty(0, dtype=np.int64)
+        self._reward_labels = np.empty(0, dtype=np.int64)
         self.step = -1
         #: The robots whose sets were merged at the last step (a renewal epoch), ascending.
         self.met = np.empty(0, dtype=np.int64)
+
+    @property
+    def labelled(self) -> bool:
+        """Whether the reward union is by label (``reward_union: label``)."""
+        return self.setup.labelled
 
     @property
     def mixture(self) -> GaussianMixture:
@@ -235,6 +270,15 @@ class ShirsatEstimator(Estimator):
         """X^_k, the targets extracted at the last update (N, 2) [m] (Vo & Ma Table III)."""
         return self._estimates.copy()
 
+    def estimate_labels(self) -> np.ndarray:
+        """The label of each row of :meth:`estimates`, (N,) int64, 0 for none (a copy).
+
+        All 0 unless the union is by label (``reward_union: label``).
+        """
+        if not self.setup.labelled:
+            return np.zeros(len(self._estimates), dtype=np.int64)
+        return self._estimate_labels.copy()
+
     def expected_count(self) -> float:
         """The sum of the components' weights (eq. 18)."""
         return float(self._mixture.weights.sum())
@@ -243,20 +287,34 @@ class ShirsatEstimator(Estimator):
         """M_k, the targets extracted so far and merged from the robots met (K, 2) [m], a copy."""
         return self._reward.copy()
 
-    def merge_rewards(self, others: Mapping[int, np.ndarray]) -> None:
+    def reward_labels(self) -> np.ndarray:
+        """The label of each member of :meth:`reward_set`, (K,) int64 (a copy).
+
+        Every label is > 0 when the union is by label (``reward_union: label``); all are
+        0 (none kept) under the union by position.
+        """
+        if not self.setup.labelled:
+            return np.zeros(len(self._reward), dtype=np.int64)
+        return self._reward_labels.copy()
+
+    def merge_rewards(self, others: Mapping[int, np.ndarray],
+                      labels: Mapping[int, np.ndarray] | None = None) -> None:
         """Eq. 6 at a renewal epoch: M_k becomes the union with the sets of the robots met.
 
         The sets, this robot's own M_k under its id and ``others`` (robot id -> that
         robot's M_k as it sent it), are taken in increasing robot id
-        (:func:`phd_swarm.core.reward_sets.union`), so every robot of a meeting that
-        receives the others' sets ends with the same set, whatever order the messages came
-        in.
+        (:func:`phd_swarm.core.reward_sets.union`, or
+        :func:`~phd_swarm.core.reward_sets.union_by_label` with ``labels``, robot id ->
+        the labels of that robot's members, which the union by label needs), so every
+        robot of a meeting that receives the others' sets ends with the same set, whatever
+        order the messages came in.
 
         Raises
         ------
         ValueError
-            If ``others`` holds this robot's own id, or a set is malformed (naming the
-            robot); the reward set is then left as it was.
+            If ``others`` holds this robot's own id, a set is malformed, or, under the
+            union by label, a set comes without its labels (naming the robot); the reward
+            set is then left as it was.
         """
         sets = {self.robot_id: self._reward}
         for rid, points in others.items():
@@ -265,8 +323,19 @@ class ShirsatEstimator(Estimator):
                 raise ValueError(f"merge_rewards: robot {self.robot_id} received a set under "
                                  f"its own id")
             sets[rid] = as_points(points, f"reward set of robot {rid}")
-        self._reward = union([sets[rid] for rid in sorted(sets)],
-                             self.setup.duplicate_distance)
+        if self.setup.labelled:
+            tags = {self.robot_id: self._reward_labels}
+            for rid in sorted(sets.keys() - {self.robot_id}):
+                if labels is None or rid not in labels:
+                    raise ValueError(f"merge_rewards: the reward set of robot {rid} came "
+                                     f"without labels (reward_union: label)")
+                tags[rid] = as_labels(labels[rid], len(sets[rid]),
+                                      f"reward set of robot {rid}")
+            self._reward_labels, self._reward = union_by_label(
+                [(tags[rid], sets[rid]) for rid in sorted(sets)])
+        else:
+            self._reward = union([sets[rid] for rid in sorted(sets)],
+                                 self.setup.duplicate_distance)
         self.met = np.array(sorted(set(sets) - {self.robot_id}), dtype=np.int64)
 
     def export_state(self) -> dict[str, np.ndarray]:
@@ -274,11 +343,15 @@ class ShirsatEstimator(Estimator):
         return self._mixture.to_arrays()
 
     def import_state(self, arrays: dict[str, np.ndarray], where: str = "mixture") -> None:
-        """Replace the mixture with checked arrays; the estimates and reward set are kept."""
+        """Replace the mixture with checked arrays; the estimates and reward set are kept.
+
+        The new components carry no label (:mod:`.shirsat_labels`).
+        """
         mix = GaussianMixture.from_arrays(arrays, where)
         if mix.dim != 2:
             raise ValueError(f"{where}: state dimension {mix.dim}, expected 2 (positions)")
         self._mixture = mix
+        self._labels = np.zeros(len(mix), dtype=np.int64)
 
 
 def predict_team(estimators: Sequence[ShirsatEstimator]) -> None:
@@ -305,6 +378,7 @@ def update_team(estimators: Sequence[ShirsatEstimator], scans: Sequence[Scan]) -
     if len(scans) != len(estimators):
         raise ValueError(f"update_team: {len(scans)} scans for {len(estimators)} robots")
     zs = [check_measurements(scan.z, 2) for scan in scans]
+    z_labels = [measurement_labels(scan) for scan in scans] if setup.labelled else None
     sensors = np.array([scan.sensor for scan in scans], dtype=float).reshape(-1, 2)
     prior = PaddedMixtures.from_mixtures([e.mixture for e in estimators])
     bw, bm, bc = setup.birth.ring_rows(sensors)
@@ -346,11 +420,23 @@ def update_team(estimators: Sequence[ShirsatEstimator], scans: Sequence[Scan]) -
     for r, post in posteriors.items():
         mix.set_row(r, post)
     merged = prune_and_merge_rows(mix, model.prune_threshold, model.merge_threshold,
-                                  model.max_components)
-    for e, scan, mixture in zip(estimators, scans, merged, strict=True):
+                                  model.max_components, model.merge_metric,
+                                  with_leads=setup.labelled)
+    if setup.labelled:
+        merged, leads = merged
+        labels = [posterior_labels(b, e._labels, z_labels[r] if r in posteriors else None)
+                  [leads[r]] for r, e in enumerate(estimators)]
+    for r, (e, scan, mixture) in enumerate(zip(estimators, scans, merged, strict=True)):
         e._mixture = mixture
         e._estimates = extract(mixture, model)
-        e._reward = extend(e._reward, [e._estimates], setup.duplicate_distance)
+        if setup.labelled:
+            e._labels = labels[r]
+            e._estimate_labels = estimate_labels(mixture.weights, e._labels,
+                                                 model.extraction_threshold)
+            e._reward_labels, e._reward = extend_by_label(
+                e._reward_labels, e._reward, e._estimate_labels, e._estimates)
+        else:
+            e._reward = extend(e._reward, [e._estimates], setup.duplicate_distance)
         e.step = int(scan.step)
         e.met = np.empty(0, dtype=np.int64)
 
@@ -373,9 +459,14 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> ShirsatSetup:
     models = scenario.models
     # The sensor's own clutter model if it has one (disk_false_positive), else the
     # scenario's uniform clutter density lambda_C.
-    sensor_model = system.parts()["sensor"].setup(scenario, system)
+    sensor = system.parts()["sensor"]
+    sensor_model = sensor.setup(scenario, system)
     kappa = (sensor_model.clutter_intensity() if hasattr(sensor_model, "clutter_intensity")
              else float(models.clutter.density))
+    if system.option("reward_union") == "label" and "target_label" not in sensor.provides:
+        raise ValueError(f"shirsat_gmphd: reward_union: label needs a sensor that identifies "
+                         f"targets (provides target_label, e.g. disk_labelled); sensor "
+                         f"{sensor.name} gives no labels")
     return make_setup(float(models.detection.radius), float(models.detection.p_d),
                       float(models.measurement.variance), kappa,
                       {spec.name: system.option(spec.name) for spec in OPTIONS})

@@ -12,7 +12,8 @@ the order of the paper's flowchart (Fig. 4; section numbers are the paper's):
    between the p_D thresholds pushed away from the robot (eq. 11, ``fov_rule``), the
    detection terms of Vo & Ma Table I; clutter kappa = the sensor's false-positive rate
    over the disk area;
-3. pruning and merging (Sec. V-C, Vo & Ma Table II);
+3. pruning and merging (Sec. V-C, Vo & Ma Table II; ``merge_metric``: the merge distance in
+   the heaviest component's metric by default, :mod:`.gm_reduce`);
 4. new components (Sec. V-D): one per measurement, weight 1, covariance R, pruned and
    merged with the mixture at once (``newborn_merge = same_step``; the paper: a newborn
    of a known target "will merge to the corresponding existing component") or only at
@@ -49,6 +50,7 @@ from .detection import DiskFov
 from .gm_births import PerMeasurementBirth
 from .gm_phd import GaussianMixture, GmPhdModel, prune_and_merge
 from .gm_phd_estimator import GmPhdEstimator
+from .gm_reduce import MERGE_METRIC_OPTION
 from .gp_motion import GpHyperparameters, predict_tracks
 from .sung_figures import step_figures
 from .tracks import TrackLayer
@@ -81,6 +83,7 @@ OPTIONS = (
     ParamSpec("merge_distance", "squared", "sung_gmphd: U bounds the squared Mahalanobis "
               "distance (Vo & Ma) or the distance itself (then U^2 is used)",
               choices=("squared", "distance")),
+    MERGE_METRIC_OPTION,
     ParamSpec("max_components", 100, "sung_gmphd: cap J_max on the components after "
               "merging (not stated in the paper)", low=1),
     ParamSpec("extraction_threshold", 0.5, "sung_gmphd: weight above which a component is "
@@ -308,6 +311,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SungSetup:
         birth_covs=np.empty((0, 2, 2)),
         clutter_intensity=kappa,
         prune_threshold=float(opt("prune_threshold")), merge_threshold=u,
+        merge_metric=str(opt("merge_metric")),
         max_components=int(opt("max_components")),
         extraction_threshold=float(opt("extraction_threshold")))
     fov = DiskFov(radius, float(scenario.models.detection.p_d),

@@ -18,7 +18,9 @@ One step k of robot r:
    robot may send before this one has started it, is kept for that step);
 3. when every contact's set is in, the estimator merges them all at once, in robot-id
    order, so every robot of the meeting ends with the same set whatever order the messages
-   came in (what makes the ROS run equal the in-memory one);
+   came in (what makes the ROS run equal the in-memory one); under the labelled reading
+   (``reward_union: label`` of ``shirsat_gmphd``) each set travels with its members' labels
+   and the union is by label;
 4. :meth:`tick`: a round without news; after ``timeout_ticks`` rounds the contacts not
    heard from are given up for this step (counted in ``stats["timeouts"]``) and the sets
    that did arrive are merged.
@@ -26,7 +28,7 @@ One step k of robot r:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -47,18 +49,26 @@ OPTIONS = (
 
 @dataclass(frozen=True)
 class RewardMsg:
-    """Robot ``src``'s reward set M_k at step ``step``: positions (K, 2) [m]."""
+    """Robot ``src``'s reward set M_k at step ``step``: positions (K, 2) [m].
+
+    ``labels``: the members' labels (K,) under the union by label, empty otherwise.
+    """
 
     src: int
     step: int
     points: np.ndarray
+    labels: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
 
     #: Its ``msg_defs`` type (for the engines' traffic counts).
     WIRE_TYPE = "RewardSet"
 
     def wire_size(self) -> int:
-        """Estimated CDR payload size [bytes]: header, ids, an empty met list, the points."""
-        return CDR_HEADER + 4 + 4 + 4 + 4 + CDR_POINT * len(self.points)
+        """Estimated CDR payload size [bytes]: header, ids, an empty met list, the points.
+
+        The labels (4 bytes each) are counted when there are some.
+        """
+        labels = 4 + 4 * len(self.labels) if len(self.labels) else 0
+        return CDR_HEADER + 4 + 4 + 4 + 4 + CDR_POINT * len(self.points) + labels
 
 
 class MeetMerge(ContactExchange):
@@ -82,6 +92,9 @@ class MeetMerge(ContactExchange):
         #: The robots whose sets were merged at the current (last) step, ascending.
         self.met: np.ndarray = np.empty(0, dtype=np.int64)
         self._points = np.empty((0, 2))
+        self._labels = np.empty(0, dtype=np.int64)
+        #: Whether the sets travel with labels (the estimator's union is by label).
+        self.labelled = False
 
     def bind_estimator(self, estimator: Any) -> None:
         """The robot's estimator, whose reward set travels (``reward_set``, ``merge_rewards``)."""
@@ -89,18 +102,24 @@ class MeetMerge(ContactExchange):
             raise ValueError("the meet_merge exchange needs an estimator with reward sets "
                              f"(reward_set, merge_rewards); {type(estimator).__name__} has none")
         self.estimator = estimator
+        self.labelled = bool(getattr(estimator, "labelled", False))
 
     def _begin(self, position: np.ndarray) -> None:
         self.met = np.empty(0, dtype=np.int64)
         self._points = self.estimator.reward_set()
+        if self.labelled:
+            self._labels = self.estimator.reward_labels()
 
     def _message(self, contact: int) -> RewardMsg:
-        return RewardMsg(self.robot_id, self._step, self._points)
+        return RewardMsg(self.robot_id, self._step, self._points, self._labels)
 
     def _complete(self, got: dict[int, RewardMsg]) -> None:
         others = {src: np.asarray(m.points, dtype=float).reshape(-1, 2)
                   for src, m in got.items()}
-        if others:
+        if others and self.labelled:
+            self.estimator.merge_rewards(others, {src: np.asarray(m.labels).reshape(-1)
+                                                  for src, m in got.items()})
+        elif others:
             self.estimator.merge_rewards(others)
         self.met = np.array(sorted(others), dtype=np.int64)
 

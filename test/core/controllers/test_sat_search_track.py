@@ -6,7 +6,8 @@ import numpy as np
 
 from phd_swarm.core import registry
 from phd_swarm.core.controllers.base import Knowledge
-from phd_swarm.core.exchange.sat_share import SatMsg, SatView
+from phd_swarm.core.exchange.radio import RangeRadio
+from phd_swarm.core.exchange.sat_share import SatMsg, SatShare, SatView
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.square_range_bearing import simulate_scan
 from phd_swarm.core.tracking_overlap import pick_switcher
@@ -114,3 +115,77 @@ def test_a_search_only_agent_keeps_searching_with_targets_in_view():
         assert len(est.estimates())
         ctl.decide(Knowledge(0, 3, s, np.empty((0, 2)), SatView(3), est), rng)
         assert ctl.tracking is expected
+
+
+def _exact_scan(s, points):
+    """Noise-free range-bearing measurements of ``points`` from ``s`` (M, 2)."""
+    d = np.asarray(points, dtype=float).reshape(-1, 2) - s
+    return np.column_stack([np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0])])
+
+
+def _overlap_run(steps=10, **options):
+    """Two agents 2 m either side of one target, noise-free measurements, for ``steps``.
+
+    Agent 0 also has a clutter point in view at every step (at three points of the square's
+    far edge in turn, more than hold_gate = 5 m from the target), which its filter takes as
+    a tentative detection and looks at. The agents exchange through ``sat_share`` and
+    decide; they do not move. Returns the windows fired per step (both agents), agent 0's
+    tentative detections per step and the smallest Q [m] per step.
+    """
+    target = np.array([[50.0, 50.0]])
+    where = [np.array([48.0, 50.0]), np.array([52.0, 50.0])]
+    points = [[43.5, 45.5], [43.5, 54.5], [43.5, 50.0]]
+    agents = [_parts(r, **options) for r in (0, 1)]
+    exchanges = [SatShare(r, RangeRadio(50.0)) for r in (0, 1)]
+    for (est, ctl, _), ex in zip(agents, exchanges, strict=True):
+        ex.bind_estimator(est)
+        ex.bind_controller(ctl)
+    ids, alive = np.arange(2), np.ones(2, dtype=bool)
+    rng = np.random.default_rng(0)
+    fired, looked, best = [], [], []
+    for k in range(steps):
+        queue = []
+        for r, ((est, _, _), ex) in enumerate(zip(agents, exchanges, strict=True)):
+            seen = np.vstack([target, [points[k % 3]]]) if r == 0 else target
+            est.predict()
+            est.update(Scan(r, k, where[r], _exact_scan(where[r], seen)))
+            ex.observe_team(k, ids, np.array(where), alive)
+            queue += ex.start_step(k, where[r], 0.0, np.empty((0, 2)))
+        for envelope in queue:
+            exchanges[envelope.dst].receive(envelope.msg)
+        for ex in exchanges:
+            ex.advance()
+        looked.append(len(agents[0][0].tentative_states()))
+        for r, (est, ctl, _) in enumerate(agents):
+            ctl.decide(Knowledge(r, k, where[r], np.empty((0, 2)), exchanges[r].view, est),
+                       rng)
+            # What travels is X^_{k+1|k}, the estimates only.
+            assert len(exchanges[1 - r].view.messages[r].predicted) == len(est.estimates())
+        fired.append(sum(ctl.overlap_step.fired for _, ctl, _ in agents))
+        best.append(min(ctl.overlap_step.best for _, ctl, _ in agents))
+        assert sum(ctl.stats["overlaps_resolved"] for _, ctl, _ in agents) == sum(fired)
+    return fired, looked, best
+
+
+def test_two_agents_tracking_one_target_detect_the_overlap_with_a_clutter_point_in_view():
+    """Eq. 19 compares the predicted multi-target states, not the looks (issue 33).
+
+    The exchanged sets are the estimates, one target each, so the window fires; with agent
+    0's clutter tentative in its set the sizes would differ, DeltaL >= c / sqrt(2) = 7.1 m,
+    and it never could. Q_th = 6 m (2 m per step): two agents' predictions of one target
+    differ by ~1-2 m, mostly through the velocity estimate.
+    """
+    fired, looked, _ = _overlap_run(overlap_threshold=6.0)
+    assert sum(looked[2:]) >= 6                     # agent 0 has a clutter look in view
+    assert sum(fired) >= 1
+
+
+def test_the_mean_form_of_the_threshold_fires_where_the_sum_cannot():
+    """Q_th = 1 m: the windows' Q is 2.5-5.6 m, so only the mean (Q / 3 <= 1 m) fires."""
+    fired_sum, _, best = _overlap_run(overlap_threshold=1.0)
+    fired_mean, _, best_mean = _overlap_run(overlap_threshold=1.0,
+                                            overlap_threshold_form="mean")
+    assert sum(fired_sum) == 0 and min(best) > 1.0
+    assert sum(fired_mean) >= 1
+    assert best_mean[:fired_mean.index(max(fired_mean))] == \
+        best[:fired_mean.index(max(fired_mean))]      # the same run until it fires

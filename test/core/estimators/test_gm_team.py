@@ -14,12 +14,12 @@ from phd_swarm.core.estimators.gm_team import (
 )
 
 
-def _model(prune=1e-3, merge=4.0, cap=7, f=None):
+def _model(prune=1e-3, merge=4.0, cap=7, f=None, metric="candidate"):
     return GmPhdModel(F=np.eye(2) if f is None else f, Q=0.2 * np.eye(2), H=np.eye(2),
                       R=0.25 * np.eye(2), p_s=0.1, birth_weights=np.empty(0),
                       birth_means=np.empty((0, 2)), birth_covs=np.empty((0, 2, 2)),
                       clutter_intensity=4e-3, prune_threshold=prune, merge_threshold=merge,
-                      max_components=cap)
+                      max_components=cap, merge_metric=metric)
 
 
 def _mixture(rng, n, spread):
@@ -50,10 +50,11 @@ def test_group_sums_are_numpys_reduceat_bit_for_bit(shape):
                               np.add.reduceat(x, first, axis=0))
 
 
+@pytest.mark.parametrize("metric", ["candidate", "heaviest"])
 @pytest.mark.parametrize("seed", range(4))
-def test_each_row_is_computed_as_if_alone_and_equals_gm_phd(seed):
+def test_each_row_is_computed_as_if_alone_and_equals_gm_phd(seed, metric):
     rng = np.random.default_rng(seed)
-    model = _model()
+    model = _model(metric=metric)
     checked = 0
     for _ in range(60):
         mixes = [_mixture(rng, int(rng.integers(0, 14)), rng.uniform(0.5, 6.0))
@@ -61,11 +62,11 @@ def test_each_row_is_computed_as_if_alone_and_equals_gm_phd(seed):
         width = max(len(m) for m in mixes) + int(rng.integers(0, 3))    # extra padding
         team = prune_and_merge_rows(PaddedMixtures.from_mixtures(mixes, width),
                                     model.prune_threshold, model.merge_threshold,
-                                    model.max_components)
+                                    model.max_components, metric)
         for mix, got in zip(mixes, team, strict=True):
             alone = prune_and_merge_rows(PaddedMixtures.from_mixtures([mix]),
                                          model.prune_threshold, model.merge_threshold,
-                                         model.max_components)[0]
+                                         model.max_components, metric)[0]
             assert _same(got, alone)
             assert _same(got, prune_and_merge(mix, model))
             checked += 1

@@ -106,14 +106,18 @@ def test_a_first_detection_is_tentative_not_an_estimate():
     assert len(est.estimates()) == 0
     tentative = est.tentative_states()
     assert len(tentative) == 1 and np.hypot(*(tentative[0, :2] - target[0])) < 0.5
-    np.testing.assert_array_equal(est.predicted_states(), tentative @ est.setup.f.T)
+    # The controller looks at it (track_states); it is not in X^_{k+1|k}, which the agents
+    # exchange and compare by eq. 19 (issue 33).
+    np.testing.assert_array_equal(est.track_states(), tentative @ est.setup.f.T)
+    assert est.predicted_states().shape == (0, 4)
     est.predict()
     est.update(Scan(0, 1, s, _exact_scan(est.setup.sensor.model, s, target)))
     assert len(est.estimates()) == 1 and len(est.tentative_states()) == 0
+    np.testing.assert_array_equal(est.predicted_states(), est.track_states())
     off, _ = _estimator(clutter_rate=0.0, look_tentative=False)
     off.predict()
     off.update(Scan(0, 0, s, _exact_scan(off.setup.sensor.model, s, target)))
-    assert len(off.predicted_states()) == 0
+    assert len(off.track_states()) == 0 and len(off.tentative_states()) == 0
 
 
 @pytest.mark.parametrize("gate", [0.0, 5.0])

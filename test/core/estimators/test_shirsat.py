@@ -112,12 +112,15 @@ def test_the_births_of_a_step_sit_around_that_steps_robot_position_and_take_its_
 def test_a_target_seen_at_the_edge_of_the_fov_gets_a_component_there(offset, kappa):
     # One measurement near (0.58 m) or just beyond (0.7 m; clutter only inside the FoV,
     # so kappa = 0 there) the 0.6 m edge, off the ring's diagonals. By hand (eq. 33-38,
-    # then Table II: all eight terms are within U = 4 of the heaviest, so they merge): the
-    # births m_l (P = 0.5 I, p_D = 0.8 at their means 0.48 m from the robot), S = 0.75 I,
-    # K = 2/3, updated covariance 1/6 I.
+    # then Table II: all eight terms are within U = 4 of the heaviest, each in its own
+    # metric, so they merge): the births m_l (P = 0.5 I, p_D = 0.8 at their means 0.48 m
+    # from the robot), S = 0.75 I, K = 2/3, updated covariance 1/6 I. The test is about the
+    # births and the update, so it takes the merge metric under which all eight merge
+    # (under the part's default, heaviest, the far births stay apart from the tight
+    # updated terms: test_gm_reduce covers the two metrics).
     q = np.array([1.0, 2.0])
     z = q + offset * np.array([np.cos(0.3), np.sin(0.3)])
-    est = ShirsatEstimator(paper_setup(), robot_id=0)
+    est = ShirsatEstimator(paper_setup(merge_metric="candidate"), robot_id=0)
     est.predict()
     est.update(Scan(0, 0, q, z[None]))
     m = RingBirth(0.48).components(q, 2).means
@@ -436,3 +439,24 @@ def test_figures_without_robots_or_targets():
                                                                  "robots_meeting"))
     empty = step_figures([_View([], 0)], np.empty((0, 2)), 10.0, 2.0)
     assert empty["all_found"] == 1.0 and empty["reward_ospa_mean"] == 0.0
+
+
+@pytest.mark.parametrize("metric, near", [("heaviest", 2), ("candidate", 1)])
+def test_the_merge_metric_option_reaches_the_model_and_the_team_step(metric, near):
+    sc = _scenario(merge_metric=metric)
+    part = registry.lookup("estimator", "shirsat_gmphd")
+    assert part.setup(sc, sc.system).model.merge_metric == metric
+    default = _scenario()
+    assert part.setup(default, default.system).model.merge_metric == "heaviest"
+    assert paper_setup().model.merge_metric == "heaviest"
+    with pytest.raises(ValueError, match="system.options.merge_metric"):
+        _scenario(merge_metric="own")
+    # A tight heavy component and a wide one 0.5 m from it, far from the robot (p_D = 0
+    # there): squared distance 0.25 / 1 <= U = 4 in the wide one's metric, 0.25 / 0.04 =
+    # 6.25 > 4 in the tight one's.
+    est = ShirsatEstimator(paper_setup(merge_metric=metric), 0)
+    est.import_state({"weights": np.array([0.9, 0.3]),
+                      "means": np.array([[10.0, 10.0], [10.5, 10.0]]),
+                      "covs": np.array([0.04 * np.eye(2), np.eye(2)])})
+    est.update(Scan(0, 0, np.zeros(2), np.empty((0, 2))))
+    assert np.count_nonzero(np.hypot(*(est.mixture.means - 10.0).T) < 1.0) == near

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from phd_swarm.core import registry
 from phd_swarm.core.estimators.detection import DiskFov
 from phd_swarm.core.estimators.gm_phd import GaussianMixture
 from phd_swarm.core.estimators.sung import SungEstimator, initial_belief
@@ -182,3 +183,14 @@ def test_step_figures_of_a_run():
     assert 0 <= f["ospa_tracks"] <= 100.0
     with pytest.raises(ValueError, match="one robot"):
         step_figures([est, est], truth, 100.0, 2.0)
+
+
+@pytest.mark.parametrize("options, metric", [({}, "heaviest"),
+                                             ({"merge_metric": "candidate"}, "candidate"),
+                                             ({"merge_metric": "heaviest"}, "heaviest")])
+def test_the_merge_metric_option_reaches_the_model(options, metric):
+    sc = sung_tokekar().with_system(options=options)
+    setup = registry.lookup("estimator", "sung_gmphd").setup(sc, sc.system)
+    assert setup.model.merge_metric == metric
+    with pytest.raises(ValueError, match="system.options.merge_metric"):
+        sung_tokekar().with_system(options={"merge_metric": "own"})

@@ -96,3 +96,49 @@ def test_silent_contacts_are_given_up_after_timeout_ticks():
 def test_an_estimator_without_reward_sets_is_refused():
     with pytest.raises(ValueError, match="reward sets"):
         MeetMerge(0, SameNodeRadio()).bind_estimator(object())
+
+
+class LabelledEstimator(FakeEstimator):
+    """A reward set by label: its members' labels travel with it and reach the merge."""
+
+    labelled = True
+
+    def __init__(self, robot_id: int, points, labels) -> None:
+        super().__init__(robot_id, points)
+        self.labels = np.asarray(labels, dtype=np.int64)
+        self.label_merges: list[dict[int, np.ndarray]] = []
+
+    def reward_labels(self) -> np.ndarray:
+        return self.labels.copy()
+
+    def merge_rewards(self, others, labels=None) -> None:
+        assert labels is not None and labels.keys() == others.keys()
+        self.label_merges.append(dict(labels))
+        super().merge_rewards(others)
+
+
+def test_under_the_union_by_label_the_sets_travel_with_their_labels():
+    robots = {}
+    for rid in (0, 1):
+        ex = MeetMerge(rid, SameNodeRadio(), timeout_ticks=3)
+        est = LabelledEstimator(rid, [[rid, 0.0], [rid, 1.0]], [rid + 1, rid + 10])
+        ex.bind_estimator(est)
+        robots[rid] = ex, est
+    assert robots[0][0].labelled
+    sent = {rid: _start(ex, alive=(True, True, False, False)) for rid, (ex, _) in robots.items()}
+    (msg,) = [e.msg for e in sent[0]]
+    np.testing.assert_array_equal(msg.labels, [1, 10])
+    # The labels' 4 bytes each and their length are counted on the wire.
+    assert msg.wire_size() == RewardMsg(0, 0, msg.points).wire_size() + 4 + 2 * 4
+    ex, est = robots[1]
+    ex.receive(msg)
+    ex.advance()
+    assert ex.done
+    np.testing.assert_array_equal(est.label_merges[0][0], [1, 10])
+
+
+def test_under_the_union_by_position_no_labels_travel():
+    ex, _ = _robot(0)
+    assert not ex.labelled
+    (env,) = [e for e in _start(ex) if e.dst == 1]
+    assert env.msg.labels.shape == (0,)
