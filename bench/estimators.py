@@ -1,6 +1,6 @@
 """Estimators benchmark: our GM-PHD (and SMC-PHD) against Stone Soup 1.9.1's, same data.
 
-Run with ``scripts/bench.sh estimators [--quick] [--no-stonesoup] [--only B|A|smc]``. The
+Run with ``scripts/bench.sh estimators [--quick] [--no-stonesoup] [--only B|A|C|smc|rb]``. The
 script installs Stone Soup (pinned, 1.9.1) into the benchmark-only environment .venv-bench
 (``scripts/bench_stonesoup_setup.sh``); with ``--no-stonesoup`` our side runs alone from the
 project's .venv and Stone Soup is never imported. Prints a table and writes the figures as
@@ -49,6 +49,25 @@ Scenario A (search, limited field of view), 500 steps (``--quick``: 60):
   ``phd_swarm.core.estimators.detection.DiskFov(25, 0.9, integrate=True)``
   (:func:`our_a_pd`). OSPA c = 100 m, p = 2, and the oracle OSPA: the estimate is
   every target that has been inside the FoV at some step so far, exactly.
+
+Scenario C (revisits of moving targets, small field of view; ours only, issue 33), 600
+steps (``--quick``: 120). Chosen for where the integrated p_D should matter on principle:
+components whose spread is comparable to the FoV when the sensor looks at them, because the
+targets move while unseen and the prior is wide against a small disk. Fixed before any run:
+
+- truth: 8 targets uniform in the 100 x 100 m square, each a random walk with variance
+  q = 0.25 m^2 per step (sd 0.5 m a step, ~7 m over a sweep), reflected at the walls;
+- sensor: the lawn-mower of A on this square (lanes along x at y = 12.5 ... 87.5 m, 25 m
+  apart), run 3 times, forward, backward, forward, at constant speed over all the steps,
+  so that each target is looked at again about every 200 steps;
+- measurements: disk FoV of radius 12.5 m (half the lane spacing: one sweep covers the
+  square once), p_D = 0.9 inside, position sd 0.5 m, clutter Poisson(1) uniform in the disk;
+- filter: state (x, y), F = I, Q = q I (the truth's model), p_S = 1, no births; initial
+  intensity a 4 x 4 grid of Gaussians at 25 m spacing, sd 10 m, weight 8/16 each;
+  kappa = 1 / (pi 12.5^2); reduction T = 1e-5, U = 4, J_max = 100;
+- rows: p_D at the mean and integrated (``DiskFov(12.5, 0.9)``), each under both merge
+  rules (``GmPhdModel.merge_metric`` "candidate" and "heaviest"); OSPA c = 50 m (half the
+  side), p = 2, and the oracle of A (the targets seen so far, at their true positions).
 
 SMC-PHD on B (``--only smc`` or the default run): Stone Soup's SMCPHDPredictor/Updater with
 a budget of N particles after resampling (``--particles``, 20000; quick: 2000) plus
@@ -163,6 +182,35 @@ class SearchSpec:
         return self.clutter_rate / (math.pi * self.radius ** 2)
 
 
+@dataclass(frozen=True)
+class RevisitSpec:
+    """Scenario C: repeated lawn-mower sweeps over random-walking targets, small disk FoV."""
+
+    steps: int = 600
+    sweeps: int = 3
+    n_targets: int = 8
+    side: float = 100.0
+    lane_spacing: float = 25.0
+    first_lane: float = 12.5
+    radius: float = 12.5
+    p_d: float = 0.9
+    r_sd: float = 0.5
+    clutter_rate: float = 1.0
+    q: float = 0.25                 # random-walk variance per step, truth and model [m^2]
+    prior_spacing: float = 25.0
+    prior_sd: float = 10.0
+    prune: float = 1e-5
+    merge: float = 4.0
+    j_max: int = 100
+    ospa_c: float = 50.0
+    ospa_p: float = 2.0
+
+    @property
+    def clutter_intensity(self) -> float:
+        """Clutter intensity kappa [1/m^2]: the clutter rate over the FoV disk."""
+        return self.clutter_rate / (math.pi * self.radius ** 2)
+
+
 @dataclass(frozen=True, eq=False)
 class ScenarioData:
     """Truth and measurements of one run, generated once, shared by both implementations."""
@@ -253,6 +301,49 @@ def make_search(spec: SearchSpec, rng: np.random.Generator) -> ScenarioData:
     return ScenarioData(truth, zs, sensor, oracle)
 
 
+def revisit_path(spec: RevisitSpec) -> np.ndarray:
+    """Sensor positions (steps, 2): the lawn-mower swept ``sweeps`` times, alternating."""
+    lanes = np.arange(spec.first_lane, spec.side, spec.lane_spacing)
+    sweep = []
+    for i, y in enumerate(lanes):
+        xs = (0.0, spec.side) if i % 2 == 0 else (spec.side, 0.0)
+        sweep += [(xs[0], y), (xs[1], y)]
+    sweep = np.asarray(sweep)
+    pts = [sweep]
+    for i in range(1, spec.sweeps):
+        pts.append((sweep[::-1] if i % 2 else sweep)[1:])
+    pts = np.vstack(pts)
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    s_pts = np.concatenate([[0.0], np.cumsum(seg)])
+    s = np.linspace(0.0, s_pts[-1], spec.steps)
+    return np.column_stack([np.interp(s, s_pts, pts[:, 0]), np.interp(s, s_pts, pts[:, 1])])
+
+
+def make_revisit(spec: RevisitSpec, rng: np.random.Generator) -> ScenarioData:
+    """Truth, measurement sets and oracle estimates of scenario C."""
+    x = rng.uniform(0.0, spec.side, (spec.n_targets, 2))
+    sensor = revisit_path(spec)
+    seen = np.zeros(spec.n_targets, dtype=bool)
+    truth, zs, oracle = [], [], []
+    for k, q in enumerate(sensor):
+        if k > 0:
+            x = x + rng.normal(0.0, math.sqrt(spec.q), x.shape)
+            x = np.abs(x)                                   # reflect at 0 and at the side
+            x = spec.side - np.abs(spec.side - x)
+        inside = np.linalg.norm(x - q, axis=1) <= spec.radius
+        seen |= inside
+        det = x[inside & (rng.random(spec.n_targets) < spec.p_d)]
+        n_c = rng.poisson(spec.clutter_rate)
+        rad = spec.radius * np.sqrt(rng.random(n_c))
+        ang = rng.uniform(0.0, 2.0 * np.pi, n_c)
+        clutter = q + np.column_stack([rad * np.cos(ang), rad * np.sin(ang)])
+        z = np.vstack([det + rng.normal(0.0, spec.r_sd, det.shape), clutter])
+        truth.append(x.copy())
+        zs.append(z[rng.permutation(len(z))])
+        oracle.append(x[seen].copy())
+    return ScenarioData(truth, zs, sensor, oracle)
+
+
 # ------------------------------------------------------------------ shared model choices
 
 
@@ -326,7 +417,8 @@ def run_estimator(est, data: ScenarioData, size: Callable[[], int]) -> Run:
     return Run(ms, sizes, estimates)
 
 
-def tracking_model(spec: TrackingSpec) -> tuple[GmPhdModel, GaussianMixture]:
+def tracking_model(spec: TrackingSpec, merge_metric: str | None = None
+                   ) -> tuple[GmPhdModel, GaussianMixture]:
     """Our GM-PHD model of scenario B and its initial intensity."""
     f, qm = cv_matrices(spec.dt, spec.q)
     h = np.zeros((2, 4))
@@ -335,18 +427,60 @@ def tracking_model(spec: TrackingSpec) -> tuple[GmPhdModel, GaussianMixture]:
     model = GmPhdModel(F=f, Q=qm, H=h, R=spec.r_sd ** 2 * np.eye(2), p_s=spec.p_s,
                        birth_weights=bw, birth_means=bm, birth_covs=bc,
                        clutter_intensity=spec.clutter_intensity, prune_threshold=spec.prune,
-                       merge_threshold=spec.merge, max_components=spec.j_max)
+                       merge_threshold=spec.merge, max_components=spec.j_max,
+                       **_rule(merge_metric))
     return model, GaussianMixture(*tracking_birth(spec, float(spec.n_initial)))
 
 
-def search_model(spec: SearchSpec) -> tuple[GmPhdModel, GaussianMixture]:
+def search_model(spec: SearchSpec, merge_metric: str | None = None
+                 ) -> tuple[GmPhdModel, GaussianMixture]:
     """Our GM-PHD model of scenario A and its initial intensity (the search prior)."""
     model = GmPhdModel(F=np.eye(2), Q=spec.q * np.eye(2), H=np.eye(2),
                        R=spec.r_sd ** 2 * np.eye(2), p_s=1.0, birth_weights=np.empty(0),
                        birth_means=np.empty((0, 2)), birth_covs=np.empty((0, 2, 2)),
                        clutter_intensity=spec.clutter_intensity, prune_threshold=spec.prune,
-                       merge_threshold=spec.merge, max_components=spec.j_max)
+                       merge_threshold=spec.merge, max_components=spec.j_max,
+                       **_rule(merge_metric))
     return model, GaussianMixture(*search_prior(spec))
+
+
+def _rule(merge_metric: str | None) -> dict[str, str]:
+    """``merge_metric`` as a GmPhdModel keyword, or none for the model's default."""
+    return {} if merge_metric is None else {"merge_metric": merge_metric}
+
+
+#: The merge rules of the GM-PHD model (issue 33).
+MERGE_METRICS = ("candidate", "heaviest")
+
+
+def revisit_model(spec: RevisitSpec, merge_metric: str | None = None
+                  ) -> tuple[GmPhdModel, GaussianMixture]:
+    """Our GM-PHD model of scenario C (random walk, no births) and its initial intensity."""
+    model = GmPhdModel(F=np.eye(2), Q=spec.q * np.eye(2), H=np.eye(2),
+                       R=spec.r_sd ** 2 * np.eye(2), p_s=1.0, birth_weights=np.empty(0),
+                       birth_means=np.empty((0, 2)), birth_covs=np.empty((0, 2, 2)),
+                       clutter_intensity=spec.clutter_intensity, prune_threshold=spec.prune,
+                       merge_threshold=spec.merge, max_components=spec.j_max,
+                       **_rule(merge_metric))
+    g = np.arange(spec.prior_spacing / 2, spec.side, spec.prior_spacing)
+    means = np.array([[x, y] for y in g for x in g])
+    covs = np.repeat((spec.prior_sd ** 2 * np.eye(2))[None], len(means), axis=0)
+    return model, GaussianMixture(np.full(len(means), spec.n_targets / len(means)), means,
+                                  covs)
+
+
+def run_revisit(data: ScenarioData, spec: RevisitSpec) -> list[tuple[str, Run]]:
+    """Scenario C's rows: p_D at the mean and integrated, under each merge rule."""
+    from phd_swarm.core.estimators.detection import DiskFov
+
+    runs = []
+    for rule in MERGE_METRICS:
+        model, prior = revisit_model(spec, rule)
+        for integrate, kind in ((False, "p_D at mean"), (True, "integrated")):
+            label = f"GM-PHD {kind}" + ("" if rule is None else f", {rule}")
+            runs.append((label, run_ours_gm(data, model, prior,
+                                            DiskFov(spec.radius, spec.p_d, integrate=integrate))))
+    return runs
 
 
 def _smc_estimator(spec: TrackingSpec, particles: int, seed: int, log_likelihood,
@@ -527,18 +661,22 @@ def main(argv: list[str] | None = None) -> int:
     """Run the benchmark, print the table and write the JSON."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="smoke run: B 20 steps with 10 targets, A 60 steps, 2000 particles")
+                        help="smoke run: B 20 steps with 10 targets, A 60 steps, C 120 steps, "
+                             "2000 particles")
     parser.add_argument("--steps", type=int, help="steps of every scenario (overrides)")
     parser.add_argument("--seed", type=int, default=1, help="scenario seed (default 1)")
     parser.add_argument("--particles", type=int,
                         help="SMC-PHD particle budget (default 20000; quick 2000)")
-    parser.add_argument("--only", choices=("B", "A", "smc", "rb"),
+    parser.add_argument("--only", choices=("B", "A", "C", "smc", "rb"),
                         help="run one scenario only")
     parser.add_argument("--no-stonesoup", action="store_true",
                         help="our side only; Stone Soup is not imported")
     parser.add_argument("--ss-gate", type=float, default=3.0,
                         help="Mahalanobis gate of Stone Soup's GM-PHD hypothesiser "
                              "(default 3, its tutorial's; inf: no gating)")
+    parser.add_argument("--merge-metric", choices=("candidate", "heaviest"),
+                        help="merge rule of our GM-PHD in A and B (default: GmPhdModel's; "
+                             "C runs both)")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results")
     args = parser.parse_args(argv)
 
@@ -554,17 +692,19 @@ def main(argv: list[str] | None = None) -> int:
 
     b_spec = TrackingSpec(steps=20, n_initial=10) if args.quick else TrackingSpec()
     a_spec = SearchSpec(steps=60) if args.quick else SearchSpec()
+    c_spec = RevisitSpec(steps=120) if args.quick else RevisitSpec()
     if args.steps is not None:
         b_spec, a_spec = replace(b_spec, steps=args.steps), replace(a_spec, steps=args.steps)
+        c_spec = replace(c_spec, steps=args.steps)
     particles = args.particles or (2000 if args.quick else 20000)
-    wanted = ("B", "A", "smc", "rb") if args.only is None else (args.only,)
+    wanted = ("B", "A", "C", "smc", "rb") if args.only is None else (args.only,)
     rows: list[dict[str, object]] = []
 
     if "B" in wanted or "smc" in wanted or "rb" in wanted:
         b_data = make_tracking(b_spec, np.random.default_rng(args.seed))
         c, p = b_spec.ospa_c, b_spec.ospa_p
     if "B" in wanted:
-        model, prior = tracking_model(b_spec)
+        model, prior = tracking_model(b_spec, args.merge_metric)
         run = run_ours_gm(b_data, model, prior, constant_p_d(b_spec.p_d))
         rows.append(summarise("B", OURS, "GM-PHD", run, b_data, c, p, "components"))
         if ss is not None:
@@ -578,7 +718,7 @@ def main(argv: list[str] | None = None) -> int:
     if "A" in wanted:
         a_data = make_search(a_spec, np.random.default_rng(args.seed))
         c, p = a_spec.ospa_c, a_spec.ospa_p
-        model, prior = search_model(a_spec)
+        model, prior = search_model(a_spec, args.merge_metric)
         for kind, label in (("mean", "GM-PHD p_D at mean"),
                             ("integrated", "GM-PHD integrated p_D")):
             rows.append(summarise("A", OURS, label,
@@ -589,6 +729,11 @@ def main(argv: list[str] | None = None) -> int:
                                   Run(**ss.run_gm_search(a_data, a_spec, search_prior(a_spec),
                                                          gate=args.ss_gate)),
                                   a_data, c, p,
+                                  "components"))
+    if "C" in wanted:
+        c_data = make_revisit(c_spec, np.random.default_rng(args.seed))
+        for label, run in run_revisit(c_data, c_spec):
+            rows.append(summarise("C", OURS, label, run, c_data, c_spec.ospa_c, c_spec.ospa_p,
                                   "components"))
     if "smc" in wanted:
         rows.append(summarise("smc", OURS, "SMC-PHD",
@@ -625,9 +770,11 @@ def main(argv: list[str] | None = None) -> int:
 
     compare(rows)
     extra: dict[str, object] = {"seed": args.seed, "quick": args.quick,
+                                "merge_metric": args.merge_metric or "model default",
                                 "stonesoup_gate": args.ss_gate,
                                 "particles": particles, "tracking_spec": asdict(b_spec),
-                                "search_spec": asdict(a_spec)}
+                                "search_spec": asdict(a_spec),
+                                "revisit_spec": asdict(c_spec)}
     if ss is not None:
         extra["stonesoup"] = ss.version()
     meta = machine_meta(**extra)

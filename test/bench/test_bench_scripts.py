@@ -111,6 +111,16 @@ def test_bench_estimators_quick_runs_our_side_without_stone_soup(tmp_path):
     for key in (("smc", "SMC-PHD"), ("B-rb", "GM-PHD EKF"), ("B-rb", "GM-PHD UKF"),
                 ("B-rb", "SMC-PHD")):
         assert rows[key]["ospa_last_half"] < 0.5 * rows[key]["ospa_c"], key
+    # Scenario C (issue 33): both p_D forms under each merge rule, on the same data.
+    c_rows = [r for r in data["results"] if r["scenario"] == "C"]
+    assert {r["variant"].split(",")[0] for r in c_rows} == {"GM-PHD p_D at mean",
+                                                            "GM-PHD integrated"}
+    assert len(c_rows) in (2, 4)
+    assert any(ln.startswith("C ") and "integrated" in ln for ln in lines)
+    for r in c_rows:
+        assert r["steps"] == 120 == len(r["ospa_per_step"])
+        assert 0 <= r["oracle_ospa_last_half"] <= r["ospa_last_half"] <= r["ospa_c"] == 50.0
+    assert data["meta"]["revisit_spec"]["radius"] == 12.5
 
 
 @pytest.mark.ros

@@ -137,6 +137,18 @@ class GmPhdEstimator(Estimator):
         component's p_D falls to ``lower`` (``threshold``: the rule's stated aim, "get
         pushed outside the FOV", with the smallest move; found by bisection on the
         distance, to 1e-6 of it).
+    undetected_births : {"keep", "drop"}
+        What the update does with the model's fixed birth intensity (Vo & Ma A.3) where no
+        measurement detects it. ``keep`` (default): a birth component has a
+        missed-detection term ``(1 - p_D) w`` like any other (Vo & Ma Table I), so an
+        undetected newborn is carried on. ``drop``: it has none, as the newborns of
+        :class:`.gm_births.AdaptiveBirth` (Ristic et al. 2012) and Stone Soup's
+        ``PHDUpdater``: a birth is a target seen for the first time, and one not seen is
+        offered again by the next step's birth intensity rather than carried. The births
+        then also count as newborn, not persistent, in AdaptiveBirth's ``U_k(z)``. With a
+        wide birth prior re-issued at the sensor each step and p_S = 1, ``keep`` piles the
+        undetected newborns up (about (1 - p_D) of each birth: 0.65 of it with the
+        integrated p_D of a 25 m-sd birth in a 25 m disk), see docs/benchmarks.md.
     """
 
     def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
@@ -144,7 +156,8 @@ class GmPhdEstimator(Estimator):
                  measurement: MeasurementModel | None = None,
                  birth: BirthRule = None,
                  fov_push: tuple[float, float] | None = None,
-                 fov_push_to: str = "paper") -> None:
+                 fov_push_to: str = "paper",
+                 undetected_births: str = "keep") -> None:
         if model.dim < 2:
             raise ValueError(f"GmPhdEstimator needs a state whose first two coordinates are "
                              f"the position, got d={model.dim}")
@@ -161,6 +174,10 @@ class GmPhdEstimator(Estimator):
         if fov_push_to not in ("paper", "threshold"):
             raise ValueError(f"fov_push_to must be 'paper' or 'threshold', got {fov_push_to!r}")
         self.fov_push_to = fov_push_to
+        if undetected_births not in ("keep", "drop"):
+            raise ValueError(f"undetected_births must be 'keep' or 'drop', got "
+                             f"{undetected_births!r}")
+        self.undetected_births = undetected_births
         self.mixture = GaussianMixture.empty(model.dim) if mixture is None else mixture
         if self.mixture.dim != model.dim:
             raise ValueError(f"initial mixture has dimension {self.mixture.dim}, the model "
@@ -176,8 +193,10 @@ class GmPhdEstimator(Estimator):
             np.concatenate([predicted.weights, self._proposed.weights]),
             np.concatenate([predicted.means, self._proposed.means]),
             np.concatenate([predicted.covs, self._proposed.covs]))
-        self._newborn = np.concatenate([np.zeros(len(predicted), dtype=bool),
-                                        np.ones(len(self._proposed), dtype=bool)])
+        flags = np.zeros(len(predicted), dtype=bool)
+        if self.undetected_births == "drop":
+            flags[:len(self.model.birth_weights)] = True   # predict() puts the births first
+        self._newborn = np.concatenate([flags, np.ones(len(self._proposed), dtype=bool)])
         self._proposed = GaussianMixture.empty(self.model.dim)
 
     def update(self, scan: Scan) -> None:

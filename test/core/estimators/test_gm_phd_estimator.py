@@ -223,3 +223,35 @@ def test_the_threshold_reading_pushes_edge_components_just_until_p_d_is_the_lowe
     np.testing.assert_allclose(moved[3], means[3])
     with pytest.raises(ValueError, match="fov_push_to"):
         GmPhdEstimator(_static_model(), fov_push=(0.4, 0.6), fov_push_to="far")
+
+
+def test_undetected_births_keep_a_missed_term_or_are_dropped():
+    from phd_swarm.core.estimators.detection import DiskFov
+
+    # A wide birth at the sensor (sd = the FoV's radius): integrated p_D = 0.9 (1 - e^-1/2).
+    model = _static_model(birth_weights=[0.05], birth_means=[[0.0, 0.0]],
+                          birth_covs=[625.0 * np.eye(2)], prune_threshold=1e-9,
+                          merge_threshold=0.0)   # no merging, whichever rule
+    fov = DiskFov(25.0, 0.9)
+    p_d = 0.9 * (1.0 - np.exp(-0.5))
+    keep = GmPhdEstimator(model, p_d=fov)
+    drop = GmPhdEstimator(model, p_d=fov, undetected_births="drop")
+    for est in (keep, drop):
+        est.predict()
+        est.update(_scan(0, np.empty((0, 2))))
+    np.testing.assert_allclose(keep.mixture.weights, [0.05 * (1.0 - p_d)], rtol=1e-9)
+    assert len(drop.mixture) == 0
+    # A detection: the birth's detection term is the same either way; "keep" adds the miss.
+    z = np.array([[3.0, 4.0]])
+    for est in (keep, drop):
+        est.mixture = GaussianMixture.empty(2)
+        est.predict()
+        est.update(_scan(1, z))
+    s = 625.25
+    q = np.exp(-0.5 * 25.0 / s) / (2.0 * np.pi * s)
+    w_det = p_d * 0.05 * q / (1e-3 + p_d * 0.05 * q)
+    np.testing.assert_allclose(drop.mixture.weights, [w_det], rtol=1e-9)
+    np.testing.assert_allclose(sorted(keep.mixture.weights),
+                               sorted([w_det, 0.05 * (1.0 - p_d)]), rtol=1e-9)
+    with pytest.raises(ValueError, match="undetected_births"):
+        GmPhdEstimator(model, undetected_births="forget")
