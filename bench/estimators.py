@@ -268,15 +268,23 @@ def make_tracking(spec: TrackingSpec, rng: np.random.Generator) -> ScenarioData:
 
 def lawnmower(spec: SearchSpec) -> np.ndarray:
     """Sensor positions (steps, 2): lanes along x, constant speed over the whole path."""
-    lanes = np.arange(spec.first_lane, spec.side, spec.lane_spacing)
+    return _along(_lane_corners(spec.first_lane, spec.side, spec.lane_spacing), spec.steps)
+
+
+def _lane_corners(first_lane: float, side: float, spacing: float) -> np.ndarray:
+    """Corners (2L, 2) of a lawn-mower over [0, side]^2: lanes along x, every ``spacing``."""
     pts = []
-    for i, y in enumerate(lanes):
-        xs = (0.0, spec.side) if i % 2 == 0 else (spec.side, 0.0)
+    for i, y in enumerate(np.arange(first_lane, side, spacing)):
+        xs = (0.0, side) if i % 2 == 0 else (side, 0.0)
         pts += [(xs[0], y), (xs[1], y)]
-    pts = np.asarray(pts)
+    return np.asarray(pts)
+
+
+def _along(pts: np.ndarray, steps: int) -> np.ndarray:
+    """``steps`` positions (steps, 2) along the polyline ``pts`` at constant speed."""
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     s_pts = np.concatenate([[0.0], np.cumsum(seg)])
-    s = np.linspace(0.0, s_pts[-1], spec.steps)
+    s = np.linspace(0.0, s_pts[-1], steps)
     return np.column_stack([np.interp(s, s_pts, pts[:, 0]), np.interp(s, s_pts, pts[:, 1])])
 
 
@@ -303,20 +311,11 @@ def make_search(spec: SearchSpec, rng: np.random.Generator) -> ScenarioData:
 
 def revisit_path(spec: RevisitSpec) -> np.ndarray:
     """Sensor positions (steps, 2): the lawn-mower swept ``sweeps`` times, alternating."""
-    lanes = np.arange(spec.first_lane, spec.side, spec.lane_spacing)
-    sweep = []
-    for i, y in enumerate(lanes):
-        xs = (0.0, spec.side) if i % 2 == 0 else (spec.side, 0.0)
-        sweep += [(xs[0], y), (xs[1], y)]
-    sweep = np.asarray(sweep)
+    sweep = _lane_corners(spec.first_lane, spec.side, spec.lane_spacing)
     pts = [sweep]
     for i in range(1, spec.sweeps):
         pts.append((sweep[::-1] if i % 2 else sweep)[1:])
-    pts = np.vstack(pts)
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    s_pts = np.concatenate([[0.0], np.cumsum(seg)])
-    s = np.linspace(0.0, s_pts[-1], spec.steps)
-    return np.column_stack([np.interp(s, s_pts, pts[:, 0]), np.interp(s, s_pts, pts[:, 1])])
+    return _along(np.vstack(pts), spec.steps)
 
 
 def make_revisit(spec: RevisitSpec, rng: np.random.Generator) -> ScenarioData:

@@ -39,11 +39,32 @@ def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarra
     np.ndarray, shape (M, 2)
         Detections of targets (in target order) followed by clutter points [m].
     """
+    hits, clutter, _ = draw_scan(rng, models, sensor, targets)
+    return np.concatenate([hits, clutter], axis=0)
+
+
+def draw_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarray,
+              targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The draws of :func:`simulate_scan`, kept apart: detections, clutter and who was seen.
+
+    In this order from ``rng``: one ``random(N)`` (detections), one
+    ``standard_normal((D, 2))`` (noise), one ``poisson`` (the clutter count C) and one
+    ``random((C, 2))`` (clutter radius and angle). A sensor that adds to the positions (the
+    tag reader of :mod:`.disk_labelled`) draws them here, so its positions are these.
+
+    Returns
+    -------
+    hits : np.ndarray, shape (D, 2)
+        Measurements of the detected targets, in target order [m].
+    clutter : np.ndarray, shape (C, 2)
+        Clutter points [m].
+    detected : np.ndarray of bool, shape (N,)
+        Which targets were detected.
+    """
     sensor = np.asarray(sensor, dtype=float)[:2]
     targets = np.asarray(targets, dtype=float).reshape(-1, 2)
     det = models.detection
-    pd = det.probability(targets, sensor)
-    detected = rng.random(targets.shape[0]) < pd
+    detected = rng.random(targets.shape[0]) < det.probability(targets, sensor)
     noise = rng.standard_normal((int(detected.sum()), 2)) * np.sqrt(models.measurement.variance)
     hits = targets[detected] + noise
     n_clutter = rng.poisson(models.clutter.expected_count(det.fov_area))
@@ -52,7 +73,7 @@ def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarra
     r = det.radius * np.sqrt(u[:, 0])
     a = 2.0 * np.pi * u[:, 1]
     clutter = sensor + np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
-    return np.concatenate([hits, clutter], axis=0)
+    return hits, clutter, detected
 
 
 def _setup(scenario, system, **runtime) -> PhdModels:

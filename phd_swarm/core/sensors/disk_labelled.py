@@ -28,6 +28,7 @@ import numpy as np
 
 from .. import registry
 from ..models import PhdModels
+from .disk import draw_scan
 
 #: The label of a measurement that identifies no target (clutter).
 NO_LABEL = 0
@@ -43,9 +44,8 @@ def simulate_labelled_scan(rng: np.random.Generator, models: PhdModels, sensor: 
                            ) -> tuple[np.ndarray, np.ndarray]:
     """One measurement set and its labels for a sensor at ``sensor`` looking at ``targets``.
 
-    The draws of :func:`phd_swarm.core.sensors.disk.simulate_scan`, in its order: one
-    ``random(N)`` (detections), one ``standard_normal((D, 2))`` (noise), one ``poisson``
-    (the clutter count C) and one ``random((C, 2))`` (clutter radius and angle).
+    The draws of :func:`phd_swarm.core.sensors.disk.draw_scan`, so the positions are the
+    ``disk`` sensor's.
 
     Parameters
     ----------
@@ -68,21 +68,13 @@ def simulate_labelled_scan(rng: np.random.Generator, models: PhdModels, sensor: 
         The detected targets' tags (:func:`tags`), then :data:`NO_LABEL` for each clutter
         point.
     """
-    sensor = np.asarray(sensor, dtype=float)[:2]
     targets = np.asarray(targets, dtype=float).reshape(-1, 2)
     ids = np.asarray(ids, dtype=np.int64).reshape(-1)
     if ids.shape[0] != targets.shape[0]:
         raise ValueError(f"{ids.shape[0]} ids for {targets.shape[0]} targets")
-    det = models.detection
-    detected = rng.random(targets.shape[0]) < det.probability(targets, sensor)
-    noise = rng.standard_normal((int(detected.sum()), 2)) * np.sqrt(models.measurement.variance)
-    hits = targets[detected] + noise
-    n_clutter = rng.poisson(models.clutter.expected_count(det.fov_area))
-    u = rng.random((n_clutter, 2))
-    r = det.radius * np.sqrt(u[:, 0])
-    a = 2.0 * np.pi * u[:, 1]
-    clutter = sensor + np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
-    labels = np.concatenate([tags(ids[detected]), np.full(n_clutter, NO_LABEL, np.int64)])
+    hits, clutter, detected = draw_scan(rng, models, sensor, targets)
+    labels = np.concatenate([tags(ids[detected]),
+                             np.full(clutter.shape[0], NO_LABEL, np.int64)])
     return np.concatenate([hits, clutter], axis=0), labels
 
 
