@@ -26,12 +26,13 @@ made before 2026-12 have none, and show n/a):
   be detected (``per_target_detected``), and over those ever tracked (``per_target_tracked``);
 - **in-area lifetime** [s]: the mean over targets of the time each was in the truth during
   the run (the normaliser; :mod:`phd_swarm.sim.lifetimes`);
-- **bound**: the perfect sweep's upper bound on the pooled ratio for the run's agents and
-  its own targets' lifetimes (:func:`phd_swarm.core.analysis.tracking_bound.
-  tracking_ratio_bound`, the paper's geometry);
+- **bound**: the perfect sweep's (approximate) upper bound on the pooled ratio for the
+  run's agents and its own targets' lifetimes (:func:`phd_swarm.core.analysis.
+  tracking_bound.tracking_ratio_bound`, the paper's geometry);
 - **looks** [%]: agent-steps spent tracking tentative detections only (the look rule);
 - **overlap tests / fired**: per run, the tracking-overlap windows compared with Q_th and
-  those that fired (eq. 19, Sec. V-C b), summed over the agents.
+  those that fired (eq. 19, Sec. V-C b), summed over the agents: both agents of a pair
+  test the same window, so a pair's window counts twice.
 
 Writes ``papaioannou_tables.md`` and ``.json`` and one ``<sweep>_curves.png`` per sweep
 (searched area and OSPA against time, one line per cell) into ``OUT`` (default: the first
@@ -151,7 +152,8 @@ def markdown(tables: Sequence[dict[str, Any]]) -> str:
     """One table per sweep, one row per cell: mean ± sd over runs."""
     lines = ["## Papaioannou et al.: searched area, OSPA and tracking time", "",
              f"Bound (pooled): a perfect sweep with 10 m squares tracks at most this share of "
-             f"the target time, for the run's agents and its targets' lifetimes "
+             f"the target time, for the run's agents and its targets' lifetimes (approximate: "
+             f"it takes a target's birth point independent of its lifetime) "
              f"(docs/decisions.md); for a geometric 30-step life it is "
              f"{tracking_ratio_bound(10, 30.0):.2f} with 10 agents and "
              f"{tracking_ratio_bound(2, 30.0):.2f} with 2.", ""]
@@ -162,7 +164,7 @@ def markdown(tables: Sequence[dict[str, Any]]) -> str:
         lines += ["| method | agents | targets | runs | searched area at the end [%] | "
                   "mean OSPA [m] | tracking ratio (pooled) | per target: all / detected | "
                   "bound (pooled) | in-area lifetime [s] | agents tracking (mean) | "
-                  "looks [%] | overlap tests / fired |",
+                  "looks [%] | overlap tests / fired (per agent) |",
                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for c in t["cells"]:
             s = c["stats"]

@@ -1,4 +1,4 @@
-"""An upper bound on Fig. 5a's tracking ratio for a perfect sweep (Papaioannou et al.).
+"""An (approximate) upper bound on Fig. 5a's tracking ratio for a perfect sweep (Papaioannou).
 
 Fig. 5a reports the time targets are tracked over their lifetime (0.83 for 10 agents at
 C_R = 40 m). Whatever the control, a target cannot be tracked before some agent's sensing

@@ -7,8 +7,10 @@ mixture's plain arrays. Two merge tests are offered (``merge_metric``), the two 
 - ``candidate``: ``(m_i - m_j)^T P_i^-1 (m_i - m_j) <= U``, each candidate i in its own
   metric, as Table II prints it;
 - ``heaviest``: ``(m_i - m_j)^T P_j^-1 (m_i - m_j) <= U``, every candidate in the metric of
-  the heaviest remaining component j, as Vo's published MATLAB ``gaus_merge.m`` computes it
-  (``iPt = inv(P(:,:,j))``, one inverse per group).
+  the heaviest remaining component j, the test of Vo's published MATLAB ``gaus_merge.m``
+  (``iPt = inv(P(:,:,j))``, one inverse per group). Only the test: the merged covariance
+  is Table II's moment-matched one under both rules (``gaus_merge.m`` leaves out the
+  spread of the means, ``(m - m_i)(m - m_i)^T``).
 
 They differ when the covariances do: under ``candidate`` a wide component (a birth prior, a
 long-unseen target) merges into a tight, heavy one far outside that one's spread, and the

@@ -19,8 +19,10 @@ Scalars, one value per step:
 - with the controllers: ``agents_looking``, agents whose move tracked tentative detections
   only (the look rule, ``look_tentative``); ``overlap_tests``, the tracking-overlap windows
   compared with Q_th (full, every step overlapping, both sets non-empty), summed over the
-  agents; ``overlaps_fired``, those within Q_th; ``overlap_best``, the smallest Q [m] of
-  those windows (NaN if none).
+  agents, so a pair's window counts twice, once for each agent; ``overlaps_fired``, those
+  within Q_th (again once per agent); ``overlap_best``, the smallest window sum of eq. 19's
+  scores [m] (NaN if none; under ``overlap_threshold_form: mean`` the test compares this
+  over the window's length with Q_th).
 
 Per target, with the ids (:data:`ID_FIGURES`; one row per step, the live targets in id
 order; the sweep runner pads the rows to one width with -1, :func:`phd_swarm.tools.

@@ -43,8 +43,8 @@ def measurement_labels(scan: Scan) -> np.ndarray:
     ------
     ValueError
         If the scan has measurements but no labels: the labelled reading needs a sensor
-        that identifies targets (``sensor: disk_labelled``), or, over ROS, a
-        ``MeasurementSet`` whose ``labels`` the world filled.
+        that identifies targets (``sensor: disk_labelled``; the ROS stack refuses that
+        sensor, as its messages carry no labels).
     """
     if len(scan.labels) == len(scan.z):
         return scan.labels
