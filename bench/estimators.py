@@ -297,16 +297,25 @@ def make_search(spec: SearchSpec, rng: np.random.Generator) -> ScenarioData:
     for q in sensor:
         inside = np.linalg.norm(targets - q, axis=1) <= spec.radius
         seen |= inside
-        det = targets[inside & (rng.random(spec.n_targets) < spec.p_d)]
-        n_c = rng.poisson(spec.clutter_rate)
-        rad = spec.radius * np.sqrt(rng.random(n_c))
-        ang = rng.uniform(0.0, 2.0 * np.pi, n_c)
-        clutter = q + np.column_stack([rad * np.cos(ang), rad * np.sin(ang)])
-        z = np.vstack([det + rng.normal(0.0, spec.r_sd, det.shape), clutter])
         truth.append(targets.copy())
-        zs.append(z[rng.permutation(len(z))])
+        zs.append(_disk_scan(rng, spec, q, targets, inside))
         oracle.append(targets[seen].copy())
     return ScenarioData(truth, zs, sensor, oracle)
+
+
+def _disk_scan(rng: np.random.Generator, spec: SearchSpec | RevisitSpec, q: np.ndarray,
+               x: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """One scan of A or C at ``q``, shuffled: detections and Poisson clutter in the disk.
+
+    The targets ``inside`` the disk are detected with p_D and measured with noise.
+    """
+    det = x[inside & (rng.random(len(x)) < spec.p_d)]
+    n_c = rng.poisson(spec.clutter_rate)
+    rad = spec.radius * np.sqrt(rng.random(n_c))
+    ang = rng.uniform(0.0, 2.0 * np.pi, n_c)
+    clutter = q + np.column_stack([rad * np.cos(ang), rad * np.sin(ang)])
+    z = np.vstack([det + rng.normal(0.0, spec.r_sd, det.shape), clutter])
+    return z[rng.permutation(len(z))]
 
 
 def revisit_path(spec: RevisitSpec) -> np.ndarray:
@@ -331,14 +340,8 @@ def make_revisit(spec: RevisitSpec, rng: np.random.Generator) -> ScenarioData:
             x = spec.side - np.abs(spec.side - x)
         inside = np.linalg.norm(x - q, axis=1) <= spec.radius
         seen |= inside
-        det = x[inside & (rng.random(spec.n_targets) < spec.p_d)]
-        n_c = rng.poisson(spec.clutter_rate)
-        rad = spec.radius * np.sqrt(rng.random(n_c))
-        ang = rng.uniform(0.0, 2.0 * np.pi, n_c)
-        clutter = q + np.column_stack([rad * np.cos(ang), rad * np.sin(ang)])
-        z = np.vstack([det + rng.normal(0.0, spec.r_sd, det.shape), clutter])
         truth.append(x.copy())
-        zs.append(z[rng.permutation(len(z))])
+        zs.append(_disk_scan(rng, spec, q, x, inside))
         oracle.append(x[seen].copy())
     return ScenarioData(truth, zs, sensor, oracle)
 
