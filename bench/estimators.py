@@ -183,32 +183,19 @@ class SearchSpec:
 
 
 @dataclass(frozen=True)
-class RevisitSpec:
-    """Scenario C: repeated lawn-mower sweeps over random-walking targets, small disk FoV."""
+class RevisitSpec(SearchSpec):
+    """Scenario C: repeated lawn-mower sweeps over random-walking targets, small disk FoV.
+
+    A's fields with C's values, and the number of sweeps.
+    """
 
     steps: int = 600
-    sweeps: int = 3
     n_targets: int = 8
     side: float = 100.0
-    lane_spacing: float = 25.0
-    first_lane: float = 12.5
     radius: float = 12.5
-    p_d: float = 0.9
-    r_sd: float = 0.5
-    clutter_rate: float = 1.0
     q: float = 0.25                 # random-walk variance per step, truth and model [m^2]
-    prior_spacing: float = 25.0
-    prior_sd: float = 10.0
-    prune: float = 1e-5
-    merge: float = 4.0
-    j_max: int = 100
     ospa_c: float = 50.0
-    ospa_p: float = 2.0
-
-    @property
-    def clutter_intensity(self) -> float:
-        """Clutter intensity kappa [1/m^2]: the clutter rate over the FoV disk."""
-        return self.clutter_rate / (math.pi * self.radius ** 2)
+    sweeps: int = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -303,7 +290,7 @@ def make_search(spec: SearchSpec, rng: np.random.Generator) -> ScenarioData:
     return ScenarioData(truth, zs, sensor, oracle)
 
 
-def _disk_scan(rng: np.random.Generator, spec: SearchSpec | RevisitSpec, q: np.ndarray,
+def _disk_scan(rng: np.random.Generator, spec: SearchSpec, q: np.ndarray,
                x: np.ndarray, inside: np.ndarray) -> np.ndarray:
     """One scan of A or C at ``q``, shuffled: detections and Poisson clutter in the disk.
 
