@@ -444,13 +444,11 @@ MERGE_METRICS = ("candidate", "heaviest")
 
 def revisit_model(spec: RevisitSpec, merge_metric: str | None = None
                   ) -> tuple[GmPhdModel, GaussianMixture]:
-    """Our GM-PHD model of scenario C (random walk, no births) and its initial intensity."""
-    model = GmPhdModel(F=np.eye(2), Q=spec.q * np.eye(2), H=np.eye(2),
-                       R=spec.r_sd ** 2 * np.eye(2), p_s=1.0, birth_weights=np.empty(0),
-                       birth_means=np.empty((0, 2)), birth_covs=np.empty((0, 2, 2)),
-                       clutter_intensity=spec.clutter_intensity, prune_threshold=spec.prune,
-                       merge_threshold=spec.merge, max_components=spec.j_max,
-                       **_rule(merge_metric))
+    """Our GM-PHD model of scenario C (random walk, no births) and its initial intensity.
+
+    The model is A's (:func:`search_model`) with C's values; the prior is a uniform grid.
+    """
+    model, _ = search_model(spec, merge_metric)
     g = np.arange(spec.prior_spacing / 2, spec.side, spec.prior_spacing)
     means = np.array([[x, y] for y in g for x in g])
     covs = np.repeat((spec.prior_sd ** 2 * np.eye(2))[None], len(means), axis=0)
