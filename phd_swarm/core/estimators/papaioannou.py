@@ -61,7 +61,7 @@ from .smc_phd import (
     update,
 )
 
-#: Results revision of the parts this module registers (:func:`phd_swarm.config.sweep_spec.
+#: Results revision of the parts this module registers (:func:`phd_swarm.config.sweep_hash.
 #: results_revisions`). 2: ``predicted_states`` no longer holds the tentative detections, so
 #: the exchanged sets that eq. 19 compares are the estimates only (issue 33).
 RESULTS_REVISION = 2
