@@ -25,14 +25,15 @@ from results_io import machine_meta, write_results
 
 from phd_swarm.core.grid import Environment
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
+from phd_swarm.sim.scenario import Scenario
 
 AREA_PER_ROBOT = 400.0  # [m^2]
 AREA_PER_TARGET = 500.0  # [m^2]
 INTERIOR_MARGIN = 30.0  # [m]
 
 
-def team_scenario(robots: int, seed: int) -> sc.Scenario:
+def team_scenario(robots: int, seed: int) -> Scenario:
     """Dames moving-target scenario scaled to ``robots`` at constant densities."""
     side = float(round(np.sqrt(robots * AREA_PER_ROBOT)))
     targets = max(1, int(round(side * side / AREA_PER_TARGET)))

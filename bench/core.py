@@ -30,7 +30,7 @@ from phd_swarm.core.ownership import bin_owners
 from phd_swarm.core.partition import partition
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.disk import simulate_scan
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)
 

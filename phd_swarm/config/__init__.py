@@ -6,7 +6,7 @@ A config file (``config/*.yaml``) is a standard ROS 2 parameter file::
       ros__parameters:
         use_sim_time: true
         world_frame_id: map
-        scenario:             # phd_swarm.sim.scenario.scenario_from_dict: preset + overrides
+        scenario:             # phd_swarm.sim.scenario_dict.scenario_from_dict: preset + overrides
           preset: dames_static
           robots: 20
           targets: {count: 30}
@@ -36,7 +36,8 @@ import yaml
 from phd_swarm.config.node_params import NODES, SHARED, ParamSpec
 from phd_swarm.core.params import expect_mapping
 from phd_swarm.core.system import SystemConfig
-from phd_swarm.sim.scenario import Scenario, scenario_from_dict
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.scenario_dict import scenario_from_dict
 
 #: Config-file keys of the node blocks, and the node kind each configures.
 NODE_KEYS = {"world": "world", "/**/robot": "robot", "monitor": "monitor",

@@ -32,7 +32,9 @@ from phd_swarm.sim.scenario import Scenario
 #: Part options added after results that use their parts were committed, with the default
 #: that reproduces those results: at that default they do not enter the hash.
 _LATER_OPTIONS = {"fov_push_to": "paper", "merge_metric": "candidate",
-                  "overlap_threshold_form": "sum", "reward_union": "position"}
+                  "overlap_threshold_form": "sum", "reward_union": "position",
+                  "gp_input": "estimates", "rho_cap": "fixed", "extraction_window": 3.0,
+                  "extraction_radius": 0.0}
 
 
 def config_hash(scenario: Scenario, controller: str, metric: str,

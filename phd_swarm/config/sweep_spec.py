@@ -71,7 +71,9 @@ from phd_swarm.core.params import (
 from phd_swarm.core.registry import ROLES
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.engines import ENGINES as ENGINE_CLASSES
-from phd_swarm.sim.scenario import PRESETS, Scenario, preset_name, scenario_from_dict
+from phd_swarm.sim.presets import PRESETS
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.scenario_dict import preset_name, scenario_from_dict
 
 #: Ways to reduce a trial's per-step OSPA series to one number.
 METRICS = ("final", "mean", "median")
@@ -181,7 +183,7 @@ class SweepSpec:
     quick : bool
         True for the ``quick:`` form.
     preset : str
-        Scenario preset (:data:`phd_swarm.sim.scenario.PRESETS`).
+        Scenario preset (:data:`phd_swarm.sim.presets.PRESETS`).
     figure, description : str
         Plot title and free text.
     methods : dict of str to str

@@ -87,6 +87,23 @@ class Team:
         return Agent(robot_id, self)
 
 
+def _refuse_partition_guard(team: Team) -> None:
+    """Refuse a controller whose options bound the power weights at the team's partition.
+
+    Such a bound (:class:`~phd_swarm.core.controllers.base.PowerWeightGuard`) needs every
+    robot's position at the partition; a robot of the protocol computes its cell from its
+    contacts' states alone, so only the central engine can apply it.
+    """
+    part = team.parts["controller"]
+    hook = part.extras.get("power_weight_guard")
+    guard = None if hook is None else hook(team.setups["controller"])
+    if guard is not None:
+        raise ValueError(f"controller {part.name}: option {guard.option} bounds the power "
+                         f"weights by the positions of the whole team at the partition, "
+                         f"which a robot of the distributed protocol does not know; run it "
+                         f"on the central engine (engine: central)")
+
+
 class Agent:
     """One robot of a system: exchange, estimator, controller and its generator.
 
@@ -114,6 +131,7 @@ class Agent:
     def __init__(self, robot_id: int, team: Team) -> None:
         self.robot_id = int(robot_id)
         self.team = team
+        _refuse_partition_guard(team)
         self.exchange = team.make("exchange", robot_id)
         self.estimator = team.make("estimator", robot_id)
         self.controller = team.make("controller", robot_id)

@@ -30,7 +30,11 @@ something, in [0, 1). Two modes are provided:
 
 Power weights (Sec. 3.4, eq. 12-14): robot i's power cell uses ``||x - q_i||^2 - rho_i^2``
 with ``rho_i = (mass_i)^(-1/2)``, where mass_i is the sum of wc over its cell (eq. 13,
-Chen's "O" method) or of the PHD over its cell (eq. 14, the "P" method).
+Chen's "O" method) or of the PHD over its cell (eq. 14, the "P" method). The paper puts no
+bound on rho; an unbounded rho empties its neighbours' cells. Two bounds are provided:
+a fixed cap (:func:`power_weight`'s ``rho_max``) and the paper's uncapped weight guarded
+at the partition by the distance to the nearest other robot (:func:`nearest_robot_cap`),
+which keeps every robot in its own cell.
 """
 
 from __future__ import annotations
@@ -212,6 +216,70 @@ def power_weight(mass: float | np.ndarray, rho_max: float) -> float | np.ndarray
     rho = np.where(positive, np.minimum(np.where(positive, m, 1.0) ** -0.5, rho_max),
                    float(rho_max))
     return float(rho) if rho.ndim == 0 else rho
+
+
+def nearest_robot_cap(positions: np.ndarray, rho: np.ndarray,
+                      margin: float = 0.0) -> np.ndarray:
+    """Bound each power weight by the distance to the robot's nearest other robot [m].
+
+    The guard of the uncapped power weight rho = mass^(-1/2) (Chen eq. 13-14), applied
+    where the partition is computed, at the positions it is computed for::
+
+        rho'_k = min(rho_k, g(D_k)),   g(D) = sqrt(max(0, D^2 - 2 m D)),
+
+    with D_k = min_{j != k} ||q_j - q_k|| and m = ``margin`` >= 0 (m = 0: rho'_k <= D_k).
+
+    What it guarantees (power distance d_k(x) = ||x - q_k||^2 - rho'_k^2, Chen eq. 12;
+    cell W_r = {x : d_r(x) <= d_k(x) for all k}):
+
+    1. Every generator lies in its own cell, so no cell is empty. For r != k let
+       D = ||q_r - q_k|| >= D_k. Then rho'_k <= g(D_k) <= D_k <= D, so
+       d_k(q_r) = D^2 - rho'_k^2 >= 0 >= -rho'_r^2 = d_r(q_r): rho'_k^2 - rho'_r^2 <= D^2
+       for every pair, and q_r is in W_r. With rho'_r > 0 the inequality is strict, and
+       W_r holds a disk around q_r (intersected with E): its area is > 0.
+    2. With m > 0, W_r holds every x of E with ||x - q_r|| < min(m, D_r / 2), and owns it
+       outright (no tie). W_r is cut by the half-planes (x - q_r) . u_k <= h_k,
+       u_k = (q_k - q_r) / D, h_k = (D^2 + rho'_r^2 - rho'_k^2) / (2 D)
+       (:func:`phd_swarm.core.partition.cells`). g is non-decreasing, so
+       rho'_k^2 <= g(D)^2. If D >= 2m, h_k >= (D^2 - (D^2 - 2 m D)) / (2 D) = m; if D < 2m,
+       then D_k <= D < 2m, g(D_k) = 0, rho'_k = 0 and h_k >= D / 2 >= D_r / 2. So
+       h_k >= min(m, D_r / 2) > (x - q_r) . u_k for every k. With m = the bin side, a
+       robot whose nearest other robot is more than sqrt(2) bin sides away owns the bin
+       it stands in (whose centre is within sqrt(2)/2 bin sides of it). Point 1 alone
+       does not give a bin: a cell squeezed between two heavier neighbours can be a strip
+       thinner than a bin.
+
+    Coincident robots (D_k = 0) get rho' = 0, and the lower index takes the shared point
+    (:func:`~phd_swarm.core.ownership.assign_bins`). A robot alone keeps its rho.
+
+    Parameters
+    ----------
+    positions : np.ndarray, shape (R, 2)
+        Generators q [m] at the partition.
+    rho : np.ndarray, shape (R,)
+        Power weights [m], >= 0 and finite.
+    margin : float
+        m [m], >= 0.
+
+    Returns
+    -------
+    np.ndarray, shape (R,)
+        rho' [m], a new array; rho' <= rho.
+    """
+    q = np.asarray(positions, dtype=float)
+    w = np.asarray(rho, dtype=float)
+    if q.ndim != 2 or q.shape[1] != 2 or w.shape != (q.shape[0],):
+        raise ValueError(f"positions must have shape (R, 2) and rho shape (R,), got "
+                         f"{q.shape} and {w.shape}")
+    if not (np.isfinite(margin) and margin >= 0):
+        raise ValueError(f"margin must be a finite number >= 0, got {margin!r}")
+    if q.shape[0] < 2:
+        return w.copy()
+    d2 = np.sum((q[:, None, :] - q[None, :, :]) ** 2, axis=-1)
+    np.fill_diagonal(d2, np.inf)
+    nearest = np.sqrt(d2.min(axis=1))
+    bound = np.sqrt(np.maximum(0.0, nearest * nearest - 2.0 * margin * nearest))
+    return np.minimum(w, bound)
 
 
 def cell_mass(values: np.ndarray, bin_area: float, kind: str) -> float:

@@ -23,6 +23,13 @@ a fixed 0.05 finds nothing at Chen's 0.1 m resolution.
 ``ExtractionConfig.threshold_per_m2`` states the threshold as a density instead (the
 effective per-bin threshold is ``threshold_per_m2 * bin_area``; 0.05 per m^2 reproduces
 Dames at 1 m), and ``neighbourhood_m`` states the window in metres.
+
+The square window merges close peaks: two maxima are both kept only if each lies outside
+the other's window, i.e. more than half a window apart along an axis (a 3 m window merges
+targets 1.5 m apart, and diagonal pairs up to 2.1 m apart). ``ExtractionConfig.radius_m``
+replaces the square by a disk: a bin is a maximum when no bin whose centre lies within
+``radius_m`` of its own is larger, so any two peaks more than ``radius_m`` apart, in any
+direction, are both kept (docs/decisions.md, "The extraction floor").
 """
 
 from __future__ import annotations
@@ -56,12 +63,18 @@ class ExtractionConfig:
     neighbourhood_m : float or None
         Window side [m]; the window is the nearest odd number of bins to
         ``neighbourhood_m / resolution`` (halves round up), and at least 3.
+    radius_m : float or None
+        If set, the window is the disk of this radius [m] instead of a square: the bins
+        whose centres lie within ``radius_m`` of the bin's centre (:meth:`footprint`). It
+        must reach the four nearest bins (``radius_m >= resolution``), else every bin
+        above the threshold would be a maximum.
     """
 
     threshold: float = 0.05
     neighbourhood: int = 3
     threshold_per_m2: float | None = None
     neighbourhood_m: float | None = None
+    radius_m: float | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.threshold) and self.threshold >= 0):
@@ -80,6 +93,10 @@ class ExtractionConfig:
                 np.isfinite(self.neighbourhood_m) and self.neighbourhood_m > 0):
             raise ValueError(f"extraction.neighbourhood_m must be a finite number > 0 "
                              f"or None, got {self.neighbourhood_m!r}")
+        if self.radius_m is not None and not (
+                np.isfinite(self.radius_m) and self.radius_m > 0):
+            raise ValueError(f"extraction.radius_m must be a finite number > 0 or None, "
+                             f"got {self.radius_m!r}")
 
     def bin_threshold(self, grid: Grid) -> float:
         """Per-bin mass threshold on ``grid`` (expected targets per bin)."""
@@ -98,6 +115,33 @@ class ExtractionConfig:
         half = int(np.floor((bins - 1.0) / 2.0 + 0.5))
         return max(3, 2 * half + 1)
 
+    def footprint(self, grid: Grid) -> np.ndarray | None:
+        """The disk window of :attr:`radius_m` on ``grid``, or None for a square window.
+
+        Returns
+        -------
+        np.ndarray of bool, shape (2 h + 1, 2 h + 1), or None
+            ``True`` at the offsets (dy, dx) [bins] with
+            ``(dx^2 + dy^2) resolution^2 <= radius_m^2`` (up to 1e-9 relative, so that a
+            radius of a whole number of bins reaches those bins), h = floor(radius_m /
+            resolution).
+
+        Raises
+        ------
+        ValueError
+            If ``radius_m`` < ``grid.resolution`` (the disk would hold the bin alone).
+        """
+        if self.radius_m is None:
+            return None
+        reach = self.radius_m / grid.resolution
+        if reach < 1.0 - 1e-9:
+            raise ValueError(f"a radius of {self.radius_m:g} m is below the bin side "
+                             f"({grid.resolution:g} m): every bin above the threshold would "
+                             f"be a maximum")
+        h = int(np.floor(reach + 1e-9))
+        dy, dx = np.mgrid[-h:h + 1, -h:h + 1]
+        return (dx * dx + dy * dy) <= reach * reach * (1.0 + 1e-9)
+
 
 def expected_cardinality(weights: np.ndarray) -> float:
     """Return the expected number of targets, the total PHD mass sum_j w_j (Dames Sec. II).
@@ -115,11 +159,13 @@ def extract_targets(grid: Grid, weights_image: np.ndarray,
     """Target estimates: bin centres of the local maxima of the PHD image (Dames Sec. IV).
 
     A bin is a candidate when its weight equals the maximum over the ``k x k`` window
-    centred on it (``k = config.window_bins(grid)``) and is strictly above
-    ``config.bin_threshold(grid)``. Bins outside the image count as -inf, so bins on the
-    border and in the corners can be maxima.
+    centred on it (``k = config.window_bins(grid)``), or over the disk of
+    ``config.radius_m`` when that is set (:meth:`ExtractionConfig.footprint`), and is
+    strictly above ``config.bin_threshold(grid)``. Bins outside the image count as -inf,
+    so bins on the border and in the corners can be maxima.
 
-    Plateaus: 8-connected candidates necessarily share one value and form a plateau; each
+    Plateaus: 8-connected candidates (4-connected for a disk that does not reach the
+    diagonal bins) necessarily share one value and form a plateau; each
     plateau gives a single estimate, at its bin with the lowest flat index (a deterministic
     choice that stays on the grid; the plateau centroid could fall between bins or, for a
     non-convex plateau, off it). A plateau that continues into equal-valued bins that are
@@ -157,16 +203,25 @@ def extract_targets(grid: Grid, weights_image: np.ndarray,
     if not np.all(np.isfinite(w)):
         raise ValueError("weights_image must contain only finite values")
 
-    size = cfg.window_bins(grid)
-    local_max = ndimage.maximum_filter(w, size=size, mode="constant", cval=-np.inf)
+    disk = cfg.footprint(grid)
+    if disk is None:
+        size = cfg.window_bins(grid)
+        local_max = ndimage.maximum_filter(w, size=size, mode="constant", cval=-np.inf)
+        adjacent = _EIGHT_CONNECTED
+    else:
+        local_max = ndimage.maximum_filter(w, footprint=disk, mode="constant", cval=-np.inf)
+        # Neighbours in the window are equal if both are candidates: a plateau is
+        # connected through the window's own 3 x 3 middle (4- or 8-connected).
+        h = disk.shape[0] // 2
+        adjacent = disk[h - 1:h + 2, h - 1:h + 2]
     candidate = (w == local_max) & (w > cfg.bin_threshold(grid))
     if not candidate.any():
         return np.empty((0, 2))
 
-    labels, n_plateaus = ndimage.label(candidate, structure=_EIGHT_CONNECTED)
+    labels, n_plateaus = ndimage.label(candidate, structure=adjacent)
     # Reject plateaus that touch an equal-valued non-candidate: that bin has a larger bin
     # in its window, so the plateau as a whole is not a maximum.
-    leaks = _equal_non_candidate_neighbour(w, candidate)
+    leaks = _equal_non_candidate_neighbour(w, candidate, adjacent)
     rejected = np.zeros(n_plateaus + 1, dtype=bool)
     rejected[labels[leaks]] = True
 
@@ -179,8 +234,12 @@ def extract_targets(grid: Grid, weights_image: np.ndarray,
     return grid.centres_of(keep)
 
 
-def _equal_non_candidate_neighbour(w: np.ndarray, candidate: np.ndarray) -> np.ndarray:
-    """Candidates with an 8-neighbour of the same weight that is not a candidate; (ny, nx)."""
+def _equal_non_candidate_neighbour(w: np.ndarray, candidate: np.ndarray,
+                                   adjacent: np.ndarray = _EIGHT_CONNECTED) -> np.ndarray:
+    """Candidates with a neighbour of the same weight that is not a candidate; (ny, nx).
+
+    The neighbours are the offsets where ``adjacent`` (3, 3) is True, the centre aside.
+    """
     ny, nx = w.shape
     # Padding with NaN (never equal to anything) keeps out-of-image neighbours out.
     wp = np.pad(w, 1, constant_values=np.nan)
@@ -188,7 +247,7 @@ def _equal_non_candidate_neighbour(w: np.ndarray, candidate: np.ndarray) -> np.n
     out = np.zeros_like(candidate)
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
-            if dy == 0 and dx == 0:
+            if (dy == 0 and dx == 0) or not adjacent[1 + dy, 1 + dx]:
                 continue
             nw = wp[1 + dy:1 + dy + ny, 1 + dx:1 + dx + nx]
             nc = cp[1 + dy:1 + dy + ny, 1 + dx:1 + dx + nx]

@@ -2,7 +2,7 @@
 
 The ``expect_*`` functions are the one family of checks for values read from a config: node
 parameters and options of system parts (:class:`ParamSpec`), the scenario
-(:func:`phd_swarm.sim.scenario.scenario_from_dict`), the system block
+(:func:`phd_swarm.sim.scenario_dict.scenario_from_dict`), the system block
 (:mod:`phd_swarm.core.system`), run configs (:mod:`phd_swarm.config`) and sweep specs
 (:mod:`phd_swarm.config.sweep_spec`). Each takes the value and its key path, returns the value
 converted (``float``, ``int``, a tuple for a list) or raises ValueError whose text starts

@@ -18,7 +18,10 @@ One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
 
 1. the world gives each live robot its measurement set Z^k at its position q^k;
 2. the cells of q^k with the power weights of the previous decisions partition the bins
-   (ties to the lower robot id, as in :func:`~phd_swarm.core.ownership.assign_bins`);
+   (ties to the lower robot id, as in :func:`~phd_swarm.core.ownership.assign_bins`); a
+   controller that declares a bound on the weights at the partition
+   (:class:`~phd_swarm.core.controllers.base.PowerWeightGuard`, e.g. ``chen_o`` with
+   ``rho_cap: nearest_robot``) has it applied to them first, at q^k;
 3. the filter predicts (eq. 3; per cell when the motion kernel is convolved by FFT, see
    :meth:`CentralEngine._predict_per_cell`) and updates with the sets in increasing robot
    id (eq. 4-6, Alg. 2 line 10); every scan counts one observation of the bins in its
@@ -84,6 +87,10 @@ class CentralEngine:
         self.controllers = [team.make("controller", int(i)) for i in ids]
         self.rngs = [robot_generator(scenario.seed, int(i)) for i in ids]
         self.power_weights = np.zeros(len(ids))
+        hook = team.parts["controller"].extras.get("power_weight_guard")
+        self._guard = None if hook is None else hook(team.setups["controller"])
+        self._figures = team.parts["controller"].extras.get("figures")
+        self._live_rows: list[int] = []
         self.cumulative = "cumulative" in team.parts["controller"].requires
         self.alpha = np.zeros(self.grid.size) if self.cumulative else None
         self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
@@ -111,6 +118,8 @@ class CentralEngine:
         ordered = [Scan(int(rid), k, positions[r], scans.get(int(rid), empty))
                    for r, rid in enumerate(ids.tolist()) if int(rid) in scans]
         rho = self.power_weights.copy()
+        if self._guard is not None:
+            rho = self._guard.bound(positions, rho)
         self._generators = (positions.copy(), rho)
         self.owners = bin_owners(grid, positions, rho)
         order = np.argsort(self.owners, kind="stable")
@@ -126,11 +135,13 @@ class CentralEngine:
         w = self.filter.weights.reshape(-1)
         goals = {}
         goal_rows = np.empty((len(ids), 2))
+        self._live_rows = []
         for r, rid in enumerate(ids.tolist()):
             rid = int(rid)
             if rid not in scans:
                 goal_rows[r] = positions[r]
                 continue
+            self._live_rows.append(r)
             bins = order[starts[r]:starts[r + 1]]
             # The polygon is only needed where the weights of the bins are all 0 (the
             # centroid's fallback): computed then.
@@ -189,8 +200,17 @@ class CentralEngine:
         return {}
 
     def figures(self, truth: np.ndarray, ids: np.ndarray | None = None) -> dict[str, float]:
-        """No system-specific figures: the central form is the grid PHD's."""
-        return {}
+        """The controller's per-step figures (its ``figures`` hook), or none.
+
+        ``extras["figures"](controllers, truth)`` of the controller part, given the
+        controllers of the robots that decided at the last step (e.g. ``chen_o``'s count
+        of busy robots that turned idle with a target in view,
+        :func:`~phd_swarm.core.controllers.power_lloyd.switching_figures`). The central
+        form of the estimator is the grid PHD's, which has no figures of its own.
+        """
+        if self._figures is None:
+            return {}
+        return self._figures([self.controllers[r] for r in self._live_rows], truth)
 
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx)."""

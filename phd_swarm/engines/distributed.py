@@ -397,19 +397,30 @@ class DistributedEngine:
         ``ids`` is also given the true targets' ids (when known), and one that takes
         ``controllers`` the live robots' controllers (e.g. Papaioannou et al.'s per-target
         figures and overlap counts, :mod:`phd_swarm.core.estimators.papaioannou_figures`).
+        The controller part's ``figures`` hook, ``(controllers, truth)``, adds its own
+        (as :meth:`phd_swarm.engines.central.CentralEngine.figures` does).
         """
         hook = self.team.parts["estimator"].extras.get("figures")
-        if hook is None:
+        own = self.team.parts["controller"].extras.get("figures")
+        if hook is None and own is None:
             return {}
         live = self.live_ids()
-        estimators = [self.agents[rid].estimator for rid in live]
-        takes = inspect.signature(hook).parameters
-        extra: dict[str, Any] = {}
-        if "ids" in takes and ids is not None:
-            extra["ids"] = ids
-        if "controllers" in takes:
-            extra["controllers"] = [self.agents[rid].controller for rid in live]
-        return hook(estimators, truth, self.scenario.ospa_c, self.scenario.ospa_p, **extra)
+        controllers = [self.agents[rid].controller for rid in live]
+        out: dict[str, Any] = {}
+        if hook is not None:
+            estimators = [self.agents[rid].estimator for rid in live]
+            takes = inspect.signature(hook).parameters
+            extra: dict[str, Any] = {}
+            if "ids" in takes and ids is not None:
+                extra["ids"] = ids
+            if "controllers" in takes:
+                extra["controllers"] = controllers
+            out.update(hook(estimators, truth, self.scenario.ospa_c, self.scenario.ospa_p,
+                            **extra))
+        if own is not None:
+            # The controller part's own figures (e.g. chen_o's switching counts).
+            out.update(own(controllers, truth))
+        return out
 
     def team_weights(self) -> np.ndarray:
         """The team PHD as an image (ny, nx): the union of the live robots' bins."""

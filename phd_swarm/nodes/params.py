@@ -5,7 +5,7 @@ them) and is read-only unless its spec says otherwise; values are checked again 
 so that a bad value stops the node with a message naming the node and the parameter. The
 scenario is declared as read-only ``scenario.*`` parameters (dynamic typing, so ``120`` and
 ``120.0`` are both accepted for a number) and validated by
-:func:`phd_swarm.sim.scenario.scenario_from_dict`.
+:func:`phd_swarm.sim.scenario_dict.scenario_from_dict`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,9 @@ from phd_swarm.config import flatten, scenario_to_dict, unflatten
 from phd_swarm.config.node_params import ParamSpec
 from phd_swarm.core.registry import ROLES
 from phd_swarm.core.system import DEFAULT_PARTS, SystemConfig
-from phd_swarm.sim.scenario import PRESETS, Scenario, preset_name, scenario_from_dict
+from phd_swarm.sim.presets import PRESETS
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.scenario_dict import preset_name, scenario_from_dict
 
 
 class ParameterError(ValueError):

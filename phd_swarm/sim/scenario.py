@@ -1,26 +1,21 @@
-"""Everything one simulated run needs, as frozen dataclasses, with the papers' presets.
+"""Everything one simulated run needs, as frozen dataclasses.
 
 A :class:`Scenario` fixes the map, the grid resolution, the filter's models, the time step,
 the robot team, the true target population (:class:`TargetConfig`), the extraction
-threshold, the OSPA parameters and the seed. Presets reproduce the experiments of Dames
-(2020) Sec. IV (:func:`dames_static`, :func:`dames_moving`) and Chen, Dames & Park (2021)
-Sec. 4 (:func:`chen_clustered`); :func:`scenario_from_dict` builds one from a nested mapping
-(a YAML file) by overriding a preset, and rejects unknown keys, wrong types and values out
-of range with an error that names the key and the file.
+threshold, the OSPA parameters and the seed. The papers' settings are presets
+(:mod:`phd_swarm.sim.presets`); :func:`phd_swarm.sim.scenario_dict.scenario_from_dict`
+builds a scenario from a nested mapping (a YAML file) by overriding a preset.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property, partial
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from phd_swarm.core import models as core_models
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.grid import Environment, Grid
 from phd_swarm.core.grid_graph import lattice_count, lattice_range
@@ -30,7 +25,6 @@ from phd_swarm.core.params import (
     expect_box,
     expect_int,
     expect_list,
-    expect_mapping,
     expect_number,
     expect_str,
 )
@@ -296,6 +290,10 @@ class Scenario:
         expect_int(self.seed, "seed", low=0)
         if not isinstance(self.system, SystemConfig):
             raise ValueError(f"system must be a SystemConfig, got {type(self.system).__name__}")
+        try:
+            self.extraction.footprint(self.grid)
+        except ValueError as exc:
+            raise ValueError(f"system.options.extraction_radius: {exc}") from None
         if self.robot_start_grid is not None:
             g = expect_number(self.robot_start_grid, "robot_start_grid", low=0.0, strict=True)
             object.__setattr__(self, "robot_start_grid", g)
@@ -341,10 +339,13 @@ class Scenario:
 
         Dames' window of 3 bins of 1 m, kept in metres (:data:`EXTRACTION_WINDOW_M`) so that
         the estimator is the same at every grid resolution: at 0.1 m a 3-bin window finds
-        several maxima on one target's peak (docs/decisions.md).
+        several maxima on one target's peak (docs/decisions.md). Options of ``grid_phd``
+        replace the window: ``extraction_window`` [m], ``extraction_radius`` (a disk, > 0).
         """
+        opt = dict(self.system.options)
         return ExtractionConfig(threshold_per_m2=float(self.extraction_threshold),
-                                neighbourhood_m=EXTRACTION_WINDOW_M)
+                                neighbourhood_m=opt.get("extraction_window", EXTRACTION_WINDOW_M),
+                                radius_m=opt.get("extraction_radius") or None)
 
     def initial_truth(self) -> tuple[np.ndarray, np.ndarray]:
         """The true targets at step 0 (ids (N,), positions (N, 2) [m]), as the world draws them.
@@ -373,281 +374,5 @@ class Scenario:
         return self.with_overrides(system=self.system.with_parts(**changes))
 
 
-def dames_static(robots: int = 20, targets: int = 30, resolution: float = 1.0) -> Scenario:
-    """Dames (2020) Sec. IV-A: static targets on a 100 x 100 m map, 250 s.
-
-    ``targets`` are drawn uniformly from the 120 x 120 m square centred on the map and those
-    outside E are discarded (so 30 give 20.8 on average). Robots: holonomic, 2 m/s, sensor
-    at 2 Hz (dt = 0.5 s). The robots start "at randomized locations within the box at the
-    bottom center of the environment shown in Fig. 3"; the paper does not give the box's
-    size, so we use Chen et al.'s 20 x 10 m box at the bottom centre (x 40..60, y 0..10).
-    """
-    return Scenario(
-        name="dames_static", env=MAP_100, resolution=resolution,
-        models=core_models.dames_static(), dt=0.5, duration=250.0, robots=robots,
-        robot_start_box=BOTTOM_CENTRE_BOX, robot_max_speed=2.0,
-        targets=TargetConfig(kind="static", count=targets,
-                             draw_box=(-10.0, -10.0, 110.0, 110.0)))
-
-
-def dames_moving(robots: int = 20, targets: int = 20, resolution: float = 1.0) -> Scenario:
-    """Dames (2020) Sec. IV-B: moving targets with births on a 100 x 100 m map, 500 s.
-
-    ``targets`` is the initial number, placed uniformly in E (the paper does not say how).
-    Truth: 1 m/s, heading steps N(0, 0.1 rad) at 10 Hz, removal on leaving E, births from
-    the filter's birth PHD (eq. 14, 0.1 per step within 5 m of the boundary). Robots and
-    start box as in :func:`dames_static` (the box size is our choice there too).
-    """
-    return Scenario(
-        name="dames_moving", env=MAP_100, resolution=resolution,
-        models=core_models.dames_moving(), dt=0.5, duration=500.0, robots=robots,
-        robot_start_box=BOTTOM_CENTRE_BOX, robot_max_speed=2.0,
-        targets=TargetConfig(kind="dames_walk", count=targets, speed=1.0, heading_sd=0.1,
-                             heading_rate=10.0, birth=True))
-
-
-def chen_clustered(robots: int = 70, resolution: float = 0.1) -> Scenario:
-    """Chen, Dames & Park (2021) Sec. 4: two clusters of 30 targets, 0.1 m grid, 1000 s.
-
-    Targets: 30 in the 33 x 33 m square at the lower-left corner and 30 in the one at the
-    upper-right corner, a Gaussian random walk inside the squares capped at 3 m/s. Robots:
-    start in a 20 x 10 m box at the bottom centre, 5 m/s, 5 m sensing radius. The sensor
-    rate is not given; we keep Dames' 2 Hz (dt = 0.5 s), as Chen uses Dames' sensor model.
-    The extraction threshold is not given either; we use Dames' 0.05 per m^2.
-    """
-    return Scenario(
-        name="chen_clustered", env=MAP_100, resolution=resolution,
-        models=core_models.chen_clustered(), dt=0.5, duration=1000.0, robots=robots,
-        robot_start_box=BOTTOM_CENTRE_BOX, robot_max_speed=5.0,
-        targets=TargetConfig(kind="clustered_walk", count=60,
-                             clusters=((0.0, 0.0, 33.0, 33.0), (67.0, 67.0, 100.0, 100.0)),
-                             per_cluster=(30, 30), step_sd=1.0, max_speed=3.0))
-
-
-#: Sung & Tokekar's map: a 150 x 150 m open square (Fig. 6).
-MAP_150 = Environment(0.0, 0.0, 150.0, 150.0)
-
-#: Sung & Tokekar's system: disk FoV with one false positive per step at most, GM-PHD with
-#: the limited-FoV rule and a track layer, no exchange (one robot), the lawn-mower.
-SUNG_SYSTEM = {"sensor": "disk_false_positive", "estimator": "sung_gmphd",
-               "exchange": "none", "controller": "lawnmower"}
-
-
-def sung_tokekar(targets: int = 10) -> Scenario:
-    """Sung & Tokekar (2022) Sec. VI-A: one robot, 10 stationary targets, 7,278 s.
-
-    150 x 150 m map, robot at 0.5 m/s with a disk FoV of radius 25 m (Fig. 6 caption);
-    one step per second (the caption's 7,278 time steps for three lawn-mower sweeps at
-    0.5 m/s fit dt = 1 s, docs/decisions.md). The robot starts at the lawn-mower's start,
-    the lower-left corner. Targets uniform over the map (their positions are not given).
-    OSPA with p = 2 and c = 100 m (Sec. VI-A.3). The system's parts and their options
-    (false-positive probability, initial belief, thresholds) are in ``system``.
-    """
-    return Scenario(
-        name="sung_tokekar", env=MAP_150, resolution=1.0,
-        models=core_models.sung_tokekar(), dt=1.0, duration=7278.0, robots=1,
-        robot_start_box=(0.0, 0.0, 1e-6, 1e-6), robot_max_speed=0.5,
-        targets=TargetConfig(kind="static", count=targets, draw_box=(0.0, 0.0, 150.0, 150.0),
-                             speed=0.05, turn_every=400.0),
-        ospa_c=100.0, ospa_p=2.0, system=SystemConfig(**SUNG_SYSTEM))
-
-
-#: Shirsat & Berman's system: disk sensor with Poisson clutter, a GM-PHD per robot with a
-#: reward set, meet-and-merge on the same node, the DTDS random walk.
-SHIRSAT_SYSTEM = {"sensor": "disk", "estimator": "shirsat_gmphd", "exchange": "meet_merge",
-                  "controller": "dtds_walk"}
-
-#: Grid spacing [m] and seconds per step of Shirsat & Berman's walk (not in the paper; the
-#: exact renewal analysis puts 0.5 m and 1 s nearest the paper's 68 s, docs/decisions.md).
-SHIRSAT_SPACING = 0.5
-SHIRSAT_DT = 1.0
-
-#: Seed of Shirsat & Berman's target layouts: the same targets in every run (Sec. VI).
-SHIRSAT_LAYOUT_SEED = 2021
-
-
-def shirsat_berman(side: float = 5.0, robots: int = 3, targets: int = 3,
-                   duration: float = 300.0) -> Scenario:
-    """Shirsat & Berman (2021) Sec. VI: robots on a random walk over a grid, static targets.
-
-    The small scenario (Figs. 4-8): a 5 x 5 m square, 3 robots, 3 targets, 300 s; Table 1
-    has 20 robots on 15 / 20 / 30 m squares with 10 / 15 / 20 targets for 1000 / 2000 /
-    3000 s (``side``, ``robots``, ``targets``, ``duration``). Robots start on random nodes
-    of the 0.5 m grid and move one node per 1 s step (speed 0.5 m/s; the spacing and step
-    are not given, docs/decisions.md); 4-neighbour moves with a self-loop (eq. 4). Targets
-    are drawn uniformly over the square from :data:`SHIRSAT_LAYOUT_SEED`, the same in every
-    run. OSPA (which the paper does not use) with c = 1.5 m, p = 2: c is the reward sets'
-    duplicate distance, past which an estimate is not the target's.
-    """
-    env = Environment(0.0, 0.0, float(side), float(side))
-    return Scenario(
-        name="shirsat_berman", env=env, resolution=0.1, models=core_models.shirsat_berman(),
-        dt=SHIRSAT_DT, duration=float(duration), robots=robots,
-        robot_start_box=(0.0, 0.0, float(side), float(side)),
-        robot_max_speed=SHIRSAT_SPACING / SHIRSAT_DT, robot_start_grid=SHIRSAT_SPACING,
-        targets=TargetConfig(kind="static", count=targets,
-                             draw_box=(0.0, 0.0, float(side), float(side)),
-                             layout_seed=SHIRSAT_LAYOUT_SEED),
-        ospa_c=1.5, ospa_p=2.0,
-        system=SystemConfig(**SHIRSAT_SYSTEM,
-                            options=(("grid_spacing", SHIRSAT_SPACING),)))
-
-
-#: Papaioannou et al.'s system: square range-bearing sensor, the SAT density (particle PHD
-#: and search map), the opportunistic exchange within C_R, search-and-track control.
-PAPAIOANNOU_SYSTEM = {"sensor": "square_range_bearing", "estimator": "papaioannou_sat",
-                      "exchange": "sat_share", "controller": "sat_search_track"}
-
-
-def papaioannou(agents: int = 4, targets: int = 10, spawn: str = "centre") -> Scenario:
-    """Papaioannou et al. Sec. VI: agents searching and tracking NCV targets, 100 x 100 m.
-
-    100 steps of 1 s (Sec. VI-B); agents start uniformly over the area and move by eq. 4
-    (at most 2 x 2 m per step, so the speed limit is 4 m/s); 10 targets born at the centre
-    with random headings and a mean lifetime of 60 s (Fig. 3; ``spawn: uniform`` for Fig. 4),
-    process noise q = 0.01 m^2/s^3 (the printed q = 1 is ``targets.process_noise: 1``;
-    docs/decisions.md).
-    OSPA of order 2 with c = 50 m (Fig. 3). The disk detection model of ``models`` only
-    sizes the world's field-of-view markers (radius 5 m, the square's half side); the
-    sensor part has its own models.
-    """
-    return Scenario(
-        name="papaioannou", env=MAP_100, resolution=1.0,
-        models=PhdModels(detection=core_models.DiskDetection(p_d=0.99, radius=5.0)),
-        dt=1.0, duration=100.0, robots=agents, robot_start_box=(0.0, 0.0, 100.0, 100.0),
-        robot_max_speed=4.0,
-        targets=TargetConfig(kind="ncv", count=targets, spawn=spawn, speed=1.0,
-                             lifetime_mean=60.0, process_noise=0.01),
-        ospa_c=50.0, ospa_p=2.0, system=SystemConfig(**PAPAIOANNOU_SYSTEM))
-
-
-PRESETS: dict[str, Callable[[], Scenario]] = {
-    "dames_static": dames_static, "dames_moving": dames_moving,
-    "chen_clustered": chen_clustered, "sung_tokekar": sung_tokekar,
-    "shirsat_berman": shirsat_berman, "papaioannou": papaioannou}
-
-
-def _optional_number(value: Any, path: str) -> float | None:
-    """None (the field unset), or a number."""
-    return None if value is None else expect_number(value, path)
-
-
-# Value parsers of scenario_from_dict: (value, key path) -> the field's value, converted (a
-# float for a number); the ranges are checked by the dataclasses.
-_TARGET_PARSERS: dict[str, Callable[[Any, str], Any]] = {
-    "kind": expect_str, "count": expect_int, "draw_box": expect_box, "speed": expect_number,
-    "heading_sd": expect_number, "heading_rate": expect_number, "birth": expect_bool,
-    "birth_heading": expect_str, "clusters": _boxes, "per_cluster": _counts,
-    "step_sd": expect_number, "max_speed": expect_number, "turn_every": expect_number,
-    "layout_seed": lambda v, path: None if v is None else expect_int(v, path, low=0),
-    "spawn": expect_str, "lifetime_mean": expect_number, "birth_spread": expect_number,
-    "process_noise": expect_number, "noise_form": expect_str, "lifetime_model": expect_str}
-
-_SCALAR_PARSERS: dict[str, Callable[[Any, str], Any]] = {
-    "name": expect_str, "resolution": expect_number, "dt": expect_number,
-    "duration": expect_number, "robots": expect_int, "robot_start_box": expect_box,
-    "robot_max_speed": expect_number, "extraction_threshold": expect_number,
-    "ospa_c": expect_number, "ospa_p": partial(expect_number, allow_inf=True),
-    "seed": expect_int, "robot_start_grid": _optional_number}
-
-_MODEL_PARTS = ("detection", "measurement", "clutter", "motion", "survival", "birth")
-
-
-def _merge_env(base: Environment, value: Any, path: str) -> Environment:
-    names = [f.name for f in dataclasses.fields(Environment)]
-    cfg = expect_mapping(value, path, names)
-    kw = {k: expect_number(v, f"{path}.{k}") for k, v in cfg.items()}
-    try:
-        return dataclasses.replace(base, **kw)
-    except ValueError as exc:
-        raise ValueError(f"{path}: {exc}") from None
-
-
-def _merge_models(base: PhdModels, value: Any, path: str) -> PhdModels:
-    cfg = expect_mapping(value, path, (*_MODEL_PARTS, "initial_density"))
-    kw: dict[str, Any] = {}
-    try:
-        for part in _MODEL_PARTS:
-            if part not in cfg:
-                continue
-            current = getattr(base, part)
-            sub = expect_mapping(cfg[part], f"{path}.{part}",
-                                 [f.name for f in dataclasses.fields(current)])
-            kw[part] = dataclasses.replace(
-                current, **{k: expect_number(v, f"{path}.{part}.{k}") for k, v in sub.items()})
-        if "initial_density" in cfg:
-            kw["initial_density"] = expect_number(cfg["initial_density"],
-                                                  f"{path}.initial_density")
-        return dataclasses.replace(base, **kw)
-    except ValueError as exc:
-        msg = str(exc)
-        raise ValueError(msg if msg.startswith(path) else f"{path}.{msg}") from None
-
-
-def _merge_targets(base: TargetConfig, value: Any, path: str) -> TargetConfig:
-    cfg = expect_mapping(value, path, list(_TARGET_PARSERS))
-    kw = {k: _TARGET_PARSERS[k](v, f"{path}.{k}") for k, v in cfg.items()}
-    return dataclasses.replace(base, **kw)
-
-
-def preset_name(d: Mapping[str, Any]) -> str:
-    """The preset ``d["preset"]`` names; ValueError ``preset: ...`` if missing or unknown."""
-    if "preset" not in d:
-        raise ValueError(f"preset: missing; expected one of {sorted(PRESETS)}")
-    return expect_str(d["preset"], "preset", choices=sorted(PRESETS))
-
-
-def scenario_from_dict(d: Mapping[str, Any], where: str = "scenario",
-                       base_dir: str | Path | None = None) -> Scenario:
-    """Build a scenario from a nested mapping: a preset plus overrides.
-
-    ``d["preset"]`` names one of :data:`PRESETS`; every other key overrides the field of
-    the same name. ``env``, ``models`` and ``targets`` are mappings merged key by key into
-    the preset's (e.g. ``{"models": {"detection": {"p_d": 0.9}}}`` keeps the preset's
-    radius); ``system`` names the parts and options (:class:`SystemConfig`). Boxes are
-    lists of four numbers, ``clusters`` a list of boxes.
-
-    Parameters
-    ----------
-    d : Mapping
-        E.g. a parsed YAML document.
-    where : str
-        Names the source (e.g. the file) in error messages.
-    base_dir : path, optional
-        Directory relative plugin files of ``system.plugins`` are taken from (the config
-        file's).
-
-    Returns
-    -------
-    Scenario
-        The validated scenario.
-
-    Raises
-    ------
-    ValueError
-        For a missing or unknown preset, an unknown key, a value of the wrong type or out
-        of range; the message starts with ``where`` and names the key path (e.g.
-        ``runs/a.yaml: targets.speed: expected a number, got 'fast'``).
-    """
-    try:
-        allowed = ("preset", "env", "models", "targets", "system", *_SCALAR_PARSERS)
-        cfg = expect_mapping(d, "", allowed)
-        base = PRESETS[preset_name(cfg)]()
-        kw: dict[str, Any] = {k: _SCALAR_PARSERS[k](v, k) for k, v in cfg.items()
-                              if k in _SCALAR_PARSERS}
-        if "env" in cfg:
-            kw["env"] = _merge_env(base.env, cfg["env"], "env")
-        if "models" in cfg:
-            kw["models"] = _merge_models(base.models, cfg["models"], "models")
-        if "targets" in cfg:
-            kw["targets"] = _merge_targets(base.targets, cfg["targets"], "targets")
-        if "system" in cfg:
-            kw["system"] = SystemConfig.from_dict(cfg["system"], "system", base_dir)
-        return base.with_overrides(**kw)
-    except ValueError as exc:
-        raise ValueError(f"{where}: {exc}") from None
-
-
-__all__ = ["BOTTOM_CENTRE_BOX", "MAP_100", "MAP_150", "PRESETS", "TARGET_KINDS", "Scenario",
-           "TargetConfig", "chen_clustered", "dames_moving", "dames_static", "preset_name",
-           "scenario_from_dict", "sung_tokekar"]
+__all__ = ["BOTTOM_CENTRE_BOX", "EXTRACTION_WINDOW_M", "MAP_100", "TARGET_KINDS", "Scenario",
+           "TargetConfig"]

@@ -32,7 +32,8 @@ from phd_swarm.config import flatten, node_params, scenario_to_dict
 from phd_swarm.core import registry
 from phd_swarm.core.params import ParamSpec
 from phd_swarm.nodes import qos, topics
-from phd_swarm.sim.scenario import PRESETS, TARGET_KINDS
+from phd_swarm.sim.presets import PRESETS
+from phd_swarm.sim.scenario import TARGET_KINDS
 
 #: Displayed name of a robot topic: ``/robot_<id>/<relative>``.
 ROBOT_PATTERN = "/robot_<id>/{}"

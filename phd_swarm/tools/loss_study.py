@@ -43,10 +43,11 @@ import numpy as np
 from phd_swarm.core.exchange.faults import LinkFaults
 from phd_swarm.core.exchange.voronoi_phd.context import TIMEOUT_TICKS
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
+from phd_swarm.sim.scenario import Scenario
 
 #: Scenario presets the study can run.
-SCENARIOS: dict[str, Callable[..., sc.Scenario]] = {"dames_static": sc.dames_static,
+SCENARIOS: dict[str, Callable[..., Scenario]] = {"dames_static": sc.dames_static,
                                                    "dames_moving": sc.dames_moving}
 #: Default drop rates.
 DROPS = (0.0, 0.01, 0.02, 0.05, 0.10)
@@ -107,13 +108,13 @@ def conditions(drops: Sequence[float] = DROPS, delay: float = 0.05,
     return out
 
 
-def make_scenario(name: str, robots: int, steps: int, seed: int) -> sc.Scenario:
+def make_scenario(name: str, robots: int, steps: int, seed: int) -> Scenario:
     """Preset ``name`` with ``robots`` robots, ``steps`` steps and seed ``seed``."""
     preset = SCENARIOS[name](robots=robots)
     return preset.with_overrides(seed=seed, duration=steps * preset.dt)
 
 
-def run_trial(scenario: sc.Scenario, faults: LinkFaults | None, timeout_ticks: int,
+def run_trial(scenario: Scenario, faults: LinkFaults | None, timeout_ticks: int,
               reference: list[np.ndarray] | None) -> tuple[dict[str, Any], list[np.ndarray]]:
     """Run one trial and score it.
 

@@ -543,26 +543,33 @@ def recheck(done: list[Trial], results: ResultsFile, n: int) -> bool:
     """Re-run ``n`` finished trials (:func:`pick_for_recheck`) and compare with their rows.
 
     Every column but :data:`TIMING_COLUMNS` and ``spec`` must come out the same, after the
-    same trip through the CSV text (so floats compare as stored). Prints one line per
-    trial; returns whether all agree.
+    same trip through the CSV text (so floats compare as stored). The trials run in a
+    worker process made as the sweep's are (:func:`_pool`: one BLAS thread), since a
+    multithreaded BLAS may sum in another order and change the last digits. Prints one
+    line per trial; returns whether all agree.
     """
     ok = True
-    for trial in pick_for_recheck(done, n):
-        stored = results.rows[trial.key]
-        row, _ = run_trial(trial)
-        row["spec"] = stored["spec"]
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=COLUMNS)
-        w.writeheader()
-        w.writerow(row)
-        fresh = parse_row(next(csv.DictReader(io.StringIO(buf.getvalue()))))
-        diff = [c for c in COLUMNS if c not in TIMING_COLUMNS and fresh[c] != stored[c]]
-        ok &= not diff
-        verdict = "same" if not diff else "DIFFERS in " + ", ".join(
-            f"{c} ({stored[c]!r} -> {fresh[c]!r})" for c in diff)
-        print(f"recheck {trial.key}: {trial.metric} OSPA {stored['value']:.6f} m stored, "
-              f"{fresh['value']:.6f} m now: {verdict} ({row['wall_s']:.1f} s)", flush=True)
+    picked = pick_for_recheck(done, n)
+    with _pool(1) as pool:
+        for trial, (row, _) in zip(picked, pool.imap(run_trial, picked), strict=True):
+            ok &= _compare_row(trial, row, results.rows[trial.key])
     return ok
+
+
+def _compare_row(trial: Trial, row: dict[str, Any], stored: dict[str, Any]) -> bool:
+    """Print whether a re-run row equals its stored row (:func:`recheck`); True if so."""
+    row["spec"] = stored["spec"]
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS)
+    w.writeheader()
+    w.writerow(row)
+    fresh = parse_row(next(csv.DictReader(io.StringIO(buf.getvalue()))))
+    diff = [c for c in COLUMNS if c not in TIMING_COLUMNS and fresh[c] != stored[c]]
+    verdict = "same" if not diff else "DIFFERS in " + ", ".join(
+        f"{c} ({stored[c]!r} -> {fresh[c]!r})" for c in diff)
+    print(f"recheck {trial.key}: {trial.metric} OSPA {stored['value']:.6f} m stored, "
+          f"{fresh['value']:.6f} m now: {verdict} ({row['wall_s']:.1f} s)", flush=True)
+    return not diff
 
 
 def default_out(spec: SweepSpec) -> Path:

@@ -81,7 +81,7 @@ def test_a_scenario_of_every_target_kind_survives_the_params_file(kind, tmp_path
     import dataclasses
 
     from phd_swarm.config import RunConfig, scenario_from_dict, scenario_to_dict
-    from phd_swarm.sim.scenario import sung_tokekar
+    from phd_swarm.sim.presets import sung_tokekar
 
     base = sung_tokekar()
     extra = ({"clusters": ((0.0, 0.0, 50.0, 50.0),), "per_cluster": (10,)}

@@ -12,7 +12,7 @@ from phd_swarm.config import sweep_spec
 from phd_swarm.config.sweep_spec import SpecError, config_hash, find_spec, load_spec
 from phd_swarm.core import registry
 from phd_swarm.core.params import ParamSpec
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -187,3 +187,46 @@ def test_a_results_revision_above_one_enters_the_hash(probe, monkeypatch):
     with pytest.raises(ValueError, match="system.controller: probe declares results "
                                          "revision 0; expected an integer >= 1"):
         _probe_hash()
+
+
+def test_chen_readings_options_hash_as_before_at_their_defaults():
+    # Issue 34: rho_cap (chen_p, chen_o), extraction_window and extraction_radius
+    # (grid_phd) came after chen_clustered's rows; at their defaults a system hashes as
+    # without them, whether the method text says it all or the system is hashed.
+    for name, old in (("rho_cap", "fixed"), ("extraction_window", 3.0),
+                      ("extraction_radius", 0.0)):
+        assert sweep_spec._LATER_OPTIONS[name] == old
+    chen = PRESETS["chen_clustered"]()
+    for method in ("chen_o", "chen_p"):
+        plain = config_hash(chen.with_system(controller=method), method, "median", (1, 2))
+        explicit = chen.with_system(controller=method, options={
+            "rho_cap": "fixed", "extraction_window": 3.0, "extraction_radius": 0.0})
+        assert config_hash(explicit, method, "median", (1, 2)) == plain
+        guarded = chen.with_system(controller=method, options={"rho_cap": "nearest_robot"})
+        assert config_hash(guarded, method, "median", (1, 2)) != plain
+    # A system set under scenario: (hashed whole) keeps its hash too.
+    o = chen.with_system(controller="chen_o", estimator="grid_phd", options={"rho_max": 5})
+    assert config_hash(o, "chen_o", "median", (1, 2)) == config_hash(
+        o.with_system(options={"extraction_radius": 0.0}), "chen_o", "median", (1, 2))
+
+
+def test_the_chen_readings_specs_share_chen_clustereds_rows_and_take_the_new_options():
+    readings = load_spec(find_spec("chen_readings"))
+    assert readings.methods["P_cap10"] == "chen_p(rho_max=10.0)"
+    assert readings.methods["O_lit_guard"] == \
+        "chen_o(cumulative_mode=literal,rho_cap=nearest_robot)"
+    assert readings.methods["D_r1"] == "phd(extraction_radius=1.0)"
+    trials = {t.key: t for t in readings.trials_list()}
+    assert trials["P_cap7_5_r070_t060_res1_s0"].scenario.system.option("rho_max") == 7.5
+    assert trials["D_r1_r070_t060_res1_s0"].scenario.extraction.radius_m == 1.0
+    # D, P and O are chen_clustered's trials at 70 robots: same keys, same hashes.
+    clustered = {t.key: t.config_hash for t in load_spec(find_spec("chen_clustered"))
+                 .trials_list()}
+    shared = [k for k in trials if k.split("_r070")[0] in ("D", "P", "O")]
+    assert len(shared) == 30 and all(clustered[k] == trials[k].config_hash for k in shared)
+    step = load_spec(find_spec("chen_dt025")).trials_list()[0].scenario
+    assert (step.dt, step.steps, step.models.motion.sd, step.targets.step_sd) == \
+        (0.25, 4000, 0.277, 1.5)
+    assert step.models.motion.kernel(1.0).shape == (3, 3), "the filter still moves mass"
+    fine = load_spec(find_spec("chen_extraction_fine")).trials_list()
+    assert {t.scenario.extraction.window_bins(t.scenario.grid) for t in fine} == {3, 7}

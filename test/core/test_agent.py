@@ -11,7 +11,7 @@ from phd_swarm.core.estimators.base import Estimator
 from phd_swarm.core.exchange.none import NoExchange
 from phd_swarm.core.exchange.voronoi_phd.participant import Participant
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
 from phd_swarm.sim.world import World
 
 

@@ -11,10 +11,14 @@ from phd_swarm.core.cumulative import (
     chen_lloyd_weights,
     cumulative_update_counts,
     cumulative_weight,
+    nearest_robot_cap,
     observe_scans,
     power_weight,
 )
 from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.ownership import bin_owners
+from phd_swarm.core.partition import cells
+from phd_swarm.core.polygons import points_in_polygon, polygon_area
 
 
 def fresh(size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -326,3 +330,90 @@ def test_cell_mass_scales_cumulative_weights_by_bin_area_but_not_phd():
     assert cell_mass(wc, 0.01, "phd") == pytest.approx(50.0)
     with pytest.raises(ValueError, match="kind"):
         cell_mass(wc, 0.01, "mass")
+
+
+# ------------------------------------------------------- the nearest-robot guard (eq. 13)
+
+ENV = Environment(0.0, 0.0, 100.0, 100.0)
+GRID_1M = Grid(ENV, 1.0)
+#: A busy robot (rho 0.5 m: 4 expected targets) between two idle ones 10 m away whose
+#: uncapped rho = mass^(-1/2) is 30 m (mass 1/900).
+LINE = np.array([[40.0, 50.0], [50.0, 50.0], [60.0, 50.0]])
+LINE_RHO = np.array([30.0, 0.5, 30.0])
+
+
+def test_an_uncapped_weight_empties_the_cell_between_two_idle_robots():
+    # h = (D^2 + rho_r^2 - rho_k^2) / (2 D) = (100 + 0.25 - 900) / 20 < 0 on both sides.
+    assert cells(ENV, LINE, LINE_RHO)[1].shape == (0, 2)
+    assert not np.any(bin_owners(GRID_1M, LINE, LINE_RHO) == 1)
+
+
+def test_the_guard_without_margin_keeps_the_robot_in_a_cell_a_bin_may_miss():
+    rho = nearest_robot_cap(LINE, LINE_RHO)
+    np.testing.assert_allclose(rho, [10.0, 0.5, 10.0])  # D = 10 m for every robot
+    # h = (100 + 0.25 - 100) / 20 = 0.0125 m: a 0.025 m strip around x = 50, no bin centre.
+    cell = cells(ENV, LINE, rho)[1]
+    assert polygon_area(cell) == pytest.approx(0.025 * 100.0)
+    assert points_in_polygon(LINE[1:2], cell).all()
+    assert not np.any(bin_owners(GRID_1M, LINE, rho) == 1)
+
+
+def test_the_guard_with_a_one_bin_margin_gives_the_robot_its_bins():
+    rho = nearest_robot_cap(LINE, LINE_RHO, margin=1.0)
+    # sqrt(D^2 - 2 m D) = sqrt(100 - 20) for the idle robots; 0.5 stays below it.
+    np.testing.assert_allclose(rho, [np.sqrt(80.0), 0.5, np.sqrt(80.0)])
+    # h = (100 + 0.25 - 80) / 20 = 1.0125 m >= m: the strip 48.99..51.01 holds x = 49.5, 50.5.
+    owned = GRID_1M.centres_of(np.flatnonzero(bin_owners(GRID_1M, LINE, rho) == 1))
+    assert set(np.unique(owned[:, 0])) == {49.5, 50.5} and len(owned) == 200
+
+
+def test_four_robots_a_heavy_neighbour_on_each_side():
+    # Robot 0 at the centre, three idle robots around it at 8, 10 and 12 m (their nearest
+    # robot is robot 0); uncapped, their rho (40 m) takes all of robot 0's cell. Robot 0's
+    # nearest is 8 m away, so with a 1 m margin every point within min(1, 8/2) = 1 m of it
+    # is its own.
+    q = np.array([[50.0, 50.0], [58.0, 50.0], [50.0, 60.0], [38.0, 50.0]])
+    rho = np.array([0.2, 40.0, 40.0, 40.0])
+    assert cells(ENV, q, rho)[0].shape == (0, 2)
+    guarded = nearest_robot_cap(q, rho, margin=1.0)
+    np.testing.assert_allclose(guarded, [0.2, np.sqrt(64 - 16), np.sqrt(100 - 20),
+                                         np.sqrt(144 - 24)])
+    ring = q[0] + 0.999 * np.stack([np.cos(np.linspace(0, 6.28, 32)),
+                                    np.sin(np.linspace(0, 6.28, 32))], axis=1)
+    assert points_in_polygon(ring, cells(ENV, q, guarded)[0]).all()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(2, 8), st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.5, 1.0]))
+def test_every_robot_stays_in_its_own_cell_under_the_guard(n, seed, margin):
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(0.0, 100.0, (n, 2))
+    rho = np.exp(rng.uniform(np.log(0.01), np.log(150.0), n))  # up to the diagonal
+    guarded = nearest_robot_cap(q, rho, margin=margin)
+    assert np.all(guarded <= rho)
+    polys = cells(ENV, q, guarded)
+    d2 = np.sum((q[:, None] - q[None]) ** 2, axis=-1) + np.diag(np.full(n, np.inf))
+    nearest = np.sqrt(d2.min(axis=1))
+    for r in range(n):
+        assert polys[r].shape[0] >= 3 and polygon_area(polys[r]) > 0.0
+        # Point 2 of the docstring: the disk of radius min(m, D_r / 2) is r's (a bit inside).
+        reach = 0.999 * min(margin, nearest[r] / 2) if margin > 0 else 0.0
+        ring = q[r] + reach * np.stack([np.cos(np.arange(16) * np.pi / 8),
+                                        np.sin(np.arange(16) * np.pi / 8)], axis=1)
+        inside = ring[np.all((ring >= 0.0) & (ring <= 100.0), axis=1)]
+        assert points_in_polygon(np.vstack([q[r:r + 1], inside]), polys[r]).all()
+    if margin == 1.0:
+        owners = bin_owners(GRID_1M, q, guarded)
+        own_bin = GRID_1M.flat_index(*np.floor(q[:, ::-1]).astype(int).T)
+        far = nearest > np.sqrt(2.0)
+        assert np.array_equal(owners[own_bin[far]], np.flatnonzero(far))
+
+
+def test_the_guard_leaves_a_lone_robot_and_zeroes_coincident_ones():
+    np.testing.assert_array_equal(nearest_robot_cap(np.array([[1.0, 2.0]]), [7.0]), [7.0])
+    q = np.array([[5.0, 5.0], [5.0, 5.0], [9.0, 5.0]])
+    np.testing.assert_allclose(nearest_robot_cap(q, [3.0, 3.0, 3.0]), [0.0, 0.0, 3.0])
+    with pytest.raises(ValueError, match="shape"):
+        nearest_robot_cap(q, [1.0, 2.0])
+    with pytest.raises(ValueError, match="margin"):
+        nearest_robot_cap(q, [1.0, 2.0, 3.0], margin=-1.0)

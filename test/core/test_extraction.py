@@ -282,3 +282,65 @@ def test_non_finite_image(grid: Grid, value: float) -> None:
     w[1, 1] = value
     with pytest.raises(ValueError, match="weights_image"):
         extract_targets(grid, w)
+
+
+# ------------------------------------------- windows that separate close peaks (issue 34)
+
+HALF = Grid(Environment(0.0, 0.0, 10.0, 10.0), 0.5)
+
+
+def _two_peaks(second: tuple[int, int]) -> np.ndarray:
+    """Peaks of 1.0 at bin (10, 10) and 0.8 at ``second`` on the 0.5 m grid."""
+    w = np.zeros(HALF.shape)
+    w[10, 10] = 1.0
+    w[second] = 0.8
+    return w
+
+
+@pytest.mark.parametrize(("second", "config", "found"), [
+    # 1.5 m apart along x (3 bins): inside the 3 m square (half-width 1.5 m, 7 bins) ...
+    ((10, 13), ExtractionConfig(threshold_per_m2=0.05, neighbourhood_m=3.0), 1),
+    # ... outside a 1.5 m one (3 bins) and outside a disk of 1 m.
+    ((10, 13), ExtractionConfig(threshold_per_m2=0.05, neighbourhood_m=1.5), 2),
+    ((10, 13), ExtractionConfig(threshold_per_m2=0.05, radius_m=1.0), 2),
+    ((10, 13), ExtractionConfig(threshold_per_m2=0.05, radius_m=1.5), 1),
+    # 1.41 m apart on the diagonal (2 bins each way): the 3 m square merges them, a 1 m disk
+    # does not, a 1.5 m disk does.
+    ((12, 12), ExtractionConfig(threshold_per_m2=0.05, neighbourhood_m=3.0), 1),
+    ((12, 12), ExtractionConfig(threshold_per_m2=0.05, radius_m=1.0), 2),
+    ((12, 12), ExtractionConfig(threshold_per_m2=0.05, radius_m=1.5), 1),
+])
+def test_close_peaks_are_separated_by_a_smaller_window(second, config, found):
+    out = extract_targets(HALF, _two_peaks(second), config)
+    peaks = HALF.centres_of(HALF.flat_index(np.array([10, second[0]]),
+                                            np.array([10, second[1]])))
+    np.testing.assert_allclose(out, peaks[:found])
+
+
+def test_disk_footprints():
+    one = Grid(Environment(0.0, 0.0, 4.0, 4.0), 1.0)
+    plus = ExtractionConfig(radius_m=1.0).footprint(one)
+    np.testing.assert_array_equal(plus, [[0, 1, 0], [1, 1, 1], [0, 1, 0]])
+    assert ExtractionConfig(radius_m=np.sqrt(2.0)).footprint(one).all()
+    assert ExtractionConfig(radius_m=1.0).footprint(HALF).sum() == 13  # within 2 bins
+    assert ExtractionConfig(neighbourhood_m=3.0).footprint(HALF) is None
+    with pytest.raises(ValueError, match="below the bin side"):
+        ExtractionConfig(radius_m=0.4).footprint(HALF)
+    with pytest.raises(ValueError, match="radius_m"):
+        ExtractionConfig(radius_m=-1.0)
+
+
+def test_a_plus_footprint_keeps_diagonal_maxima_apart_and_joins_plateaus_along_edges():
+    one = Grid(Environment(0.0, 0.0, 5.0, 5.0), 1.0)
+    plus = ExtractionConfig(radius_m=1.0)
+    w = np.zeros(one.shape)
+    w[1, 1], w[2, 2] = 0.5, 0.4  # diagonal neighbours: both maxima of their plus
+    np.testing.assert_allclose(extract_targets(one, w, plus), [[1.5, 1.5], [2.5, 2.5]])
+    assert len(extract_targets(one, w)) == 1  # the 3 x 3 square keeps one
+    w = np.zeros(one.shape)
+    w[2, 1:3] = 0.5  # an edge plateau: one estimate, at its lowest flat index
+    np.testing.assert_allclose(extract_targets(one, w, plus), [[1.5, 2.5]])
+    w[1, 3] = 0.5  # a diagonal bin of equal value is another plateau under the plus
+    np.testing.assert_allclose(extract_targets(one, w, plus), [[3.5, 1.5], [1.5, 2.5]])
+    w[1, 2] = 0.5  # ... joined to the first through an edge neighbour
+    np.testing.assert_allclose(extract_targets(one, w, plus), [[2.5, 1.5]])

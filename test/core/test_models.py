@@ -118,7 +118,7 @@ def _models(cfg, where="scenario.yaml"):
 
     That is the one path by which models come from a file.
     """
-    from phd_swarm.sim.scenario import scenario_from_dict
+    from phd_swarm.sim.scenario_dict import scenario_from_dict
 
     return scenario_from_dict({"preset": "dames_static", "models": cfg}, where).models
 

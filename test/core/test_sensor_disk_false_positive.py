@@ -6,7 +6,7 @@ import pytest
 from phd_swarm.core.models import DiskDetection, GaussianMeasurement, PhdModels
 from phd_swarm.core.registry import lookup
 from phd_swarm.core.sensors.disk_false_positive import DiskFalsePositiveSensor, simulate_scan
-from phd_swarm.sim.scenario import sung_tokekar
+from phd_swarm.sim.presets import sung_tokekar
 
 
 def _sensor(fp: float, p_d: float = 0.98) -> DiskFalsePositiveSensor:

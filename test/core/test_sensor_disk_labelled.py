@@ -13,7 +13,7 @@ from phd_swarm.core.sensors.disk_labelled import (
     simulate_scan,
     tags,
 )
-from phd_swarm.sim.scenario import dames_moving, shirsat_berman
+from phd_swarm.sim.presets import dames_moving, shirsat_berman
 from phd_swarm.sim.world import World
 
 

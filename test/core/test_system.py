@@ -12,9 +12,12 @@ def test_defaults_are_dames_and_every_option_is_spelled_out():
     s = SystemConfig()
     assert (s.sensor, s.estimator, s.exchange, s.controller) == ("disk", "grid_phd",
                                                                  "voronoi_phd", "phd")
-    assert s.options == ()
+    # The grid PHD's extraction window (Dames Sec. IV: 3 bins of 1 m, kept in metres).
+    grid = {"extraction_radius": 0.0, "extraction_window": 3.0}
+    assert dict(s.options) == grid
     o = SystemConfig(controller="chen_o")
-    assert dict(o.options) == {"cumulative_mode": "rate", "rho_max": 0.0}
+    assert dict(o.options) == {**grid, "cumulative_mode": "rate", "rho_cap": "fixed",
+                               "rho_max": 0.0}
     assert SystemConfig.from_dict(o.to_dict()) == o
 
 
@@ -22,8 +25,9 @@ def test_with_parts_keeps_the_options_the_new_parts_take():
     o = SystemConfig(controller="chen_o", options=(("rho_max", 3),))
     assert o.option("rho_max") == 3.0
     p = o.with_parts(controller="chen_p")
-    assert dict(p.options) == {"rho_max": 3.0}
-    assert o.with_parts(controller="phd").options == ()
+    grid = {"extraction_radius": 0.0, "extraction_window": 3.0}
+    assert dict(p.options) == {**grid, "rho_cap": "fixed", "rho_max": 3.0}
+    assert dict(o.with_parts(controller="phd").options) == grid
     assert o.with_parts(options={"cumulative_mode": "laplace"}).option("cumulative_mode") \
         == "laplace"
 

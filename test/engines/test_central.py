@@ -6,16 +6,19 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import phd_grid
+from phd_swarm.core.cumulative import nearest_robot_cap
+from phd_swarm.core.ownership import bin_owners
 from phd_swarm.core.partition import cells
 from phd_swarm.core.polygons import points_in_polygon
 from phd_swarm.engines.central import CentralEngine
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
+from phd_swarm.sim.scenario import Scenario
 
 STEPS = 120
 
 
-def _chen_o(mode: str) -> sc.Scenario:
+def _chen_o(mode: str) -> Scenario:
     return sc.chen_clustered(robots=20, resolution=1.0).with_system(
         controller="chen_o", options={"rho_max": 5.0, "cumulative_mode": mode})
 
@@ -100,3 +103,62 @@ def test_central_engine_runs_a_scenario_to_its_end():
         np.testing.assert_array_equal(engine.cell(r), polys[r])
         owned = scenario.grid.centres_of(np.flatnonzero(engine.owners == r))
         assert points_in_polygon(owned, polys[r], 1e-9).all()
+
+
+def test_the_nearest_robot_guard_bounds_the_weights_of_each_partition():
+    # chen_p with the paper's uncapped rho: the engine caps each weight at the partition
+    # (nearest_robot_cap with a one-bin margin), so every robot whose nearest other robot is
+    # more than sqrt(2) bins away owns the bin it stands in.
+    scenario = sc.chen_clustered(robots=20, resolution=1.0).with_overrides(seed=3).with_system(
+        controller="chen_p", options={"rho_cap": "nearest_robot"})
+    engine = CentralEngine(scenario)
+    grid = scenario.grid
+    uncapped = 0
+    for _ in range(40):
+        q = engine.world.robot_positions.copy()
+        rho = nearest_robot_cap(q, engine.power_weights, margin=1.0)
+        uncapped += int(np.sum(engine.power_weights > 5.0))
+        engine.step()
+        np.testing.assert_array_equal(engine.owners, bin_owners(grid, q, rho))
+        np.testing.assert_array_equal(engine._generators[1], rho)
+        d2 = np.sum((q[:, None] - q[None]) ** 2, axis=-1) + np.diag(np.full(len(q), np.inf))
+        far = np.sqrt(d2.min(axis=1)) > np.sqrt(2.0)
+        own = grid.flat_index(*np.floor(q[:, ::-1]).astype(int).T)
+        assert np.array_equal(engine.owners[own[far]], np.flatnonzero(far))
+    assert uncapped > 0, "weights above the fixed cap were exercised"
+
+
+def test_the_defaults_are_the_fixed_cap_and_the_3_m_window():
+    base = sc.chen_clustered(robots=10, resolution=1.0).with_overrides(seed=5, duration=10.0)
+    runs = []
+    for options in ({}, {"rho_cap": "fixed", "rho_max": 0.0, "extraction_window": 3.0,
+                         "extraction_radius": 0.0}):
+        engine = CentralEngine(base.with_system(controller="chen_o", options=options))
+        assert engine._guard is None
+        engine.run()
+        runs.append((engine.world.robot_positions, engine.team_weights(),
+                     engine.power_weights))
+    for a, b in zip(*runs, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_chen_o_reports_its_switching_counts_and_the_protocol_refuses_the_guard():
+    scenario = sc.chen_clustered(robots=10, resolution=1.0).with_overrides(seed=2)
+    engine = CentralEngine(scenario.with_system(controller="chen_o"))
+    zero = {"busy_robots": 0.0, "turned_idle": 0.0, "turned_idle_in_view": 0.0}
+    assert engine.figures(np.empty((0, 2))) == zero, "nobody decided before the first step"
+    ids, truth = engine.world.truth()
+    engine.step()
+    f = engine.figures(truth, ids)
+    assert set(f) == set(zero)
+    assert f["turned_idle"] == 0.0  # nobody was busy before the first step
+    assert CentralEngine(scenario.with_system(controller="chen_p")).figures(truth) == {}
+    # The distributed engine reports the same counts of the same robots.
+    dist = DistributedEngine(scenario.with_system(controller="chen_o"))
+    dist.step()
+    assert dist.figures(truth, ids) == f
+    for controller in ("chen_p", "chen_o"):
+        with pytest.raises(ValueError, match="option rho_cap: nearest_robot bounds the "
+                                             "power weights .* central engine"):
+            DistributedEngine(scenario.with_system(controller=controller,
+                                                   options={"rho_cap": "nearest_robot"}))

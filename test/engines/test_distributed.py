@@ -7,7 +7,7 @@ import pytest
 
 from phd_swarm.core.models import DiskDetection, PhdModels, UniformClutter
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
 
 pytestmark = pytest.mark.slow
 

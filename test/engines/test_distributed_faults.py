@@ -9,7 +9,7 @@ import phd_swarm.engines.distributed as engine_module
 from phd_swarm.core.exchange.faults import LinkFaults
 from phd_swarm.core.models import DiskDetection, PhdModels, UniformClutter
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
 
 pytestmark = pytest.mark.slow
 

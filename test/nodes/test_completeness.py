@@ -91,7 +91,7 @@ def test_reporters_is_one_rule_for_sets_and_arrays():
 
 def test_a_robot_writes_the_outputs_its_parts_provide():
     from phd_swarm.nodes.completeness import monitor_density, robot_outputs
-    from phd_swarm.sim.scenario import dames_static, sung_tokekar
+    from phd_swarm.sim.presets import dames_static, sung_tokekar
 
     dames, sung = dames_static().system, sung_tokekar().system
     assert robot_outputs(dames) == ("goal", "status", "cell", "density", "estimates")

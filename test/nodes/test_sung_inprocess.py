@@ -2,7 +2,8 @@
 
 One robot node (GM-PHD with the limited-FoV rule, tracks, a lawn-mower; no exchange), the
 world with the false-positive sensor, and the monitor: the robot's components, targets and
-tracks, and the monitor's scores and figures, equal the in-memory engine's bit for bit.
+tracks, and the monitor's scores and figures, equal the in-memory engine's bit for bit,
+with the GP fed by the tracks' estimates and by their detections (issue 34).
 """
 
 from __future__ import annotations
@@ -12,26 +13,28 @@ import pytest
 
 from phd_swarm.core.scoring import score_estimates
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim.scenario import sung_tokekar
+from phd_swarm.sim.presets import sung_tokekar
 
 STEPS = 80
 
 
-def _scenario(controller: str = "lawnmower"):
+def _scenario(controller: str = "lawnmower", gp_input: str = "estimates"):
     return sung_tokekar().with_system(controller=controller, options={
-        "false_positive_prob": 0.2, "gp_prediction": True}).with_overrides(
-        seed=3, duration=float(STEPS))
+        "false_positive_prob": 0.2, "gp_prediction": True,
+        "gp_input": gp_input}).with_overrides(seed=3, duration=float(STEPS))
 
 
 @pytest.mark.ros
-@pytest.mark.parametrize("controller", ["lawnmower", "largest_gaussian"])
-def test_lockstep_robot_equals_in_memory_engine(tmp_path, controller):
+@pytest.mark.parametrize("controller, gp_input", [("lawnmower", "estimates"),
+                                                  ("largest_gaussian", "estimates"),
+                                                  ("lawnmower", "detections")])
+def test_lockstep_robot_equals_in_memory_engine(tmp_path, controller, gp_input):
     from phd_swarm.nodes import gm_convert
     from phd_swarm.nodes import topics as T
     from phd_swarm.testing import InProcessRos, start_swarm
     from phd_swarm_msgs.msg import GaussianMixture, TrackSet
 
-    scenario = _scenario(controller)
+    scenario = _scenario(controller, gp_input)
     components: dict[int, GaussianMixture] = {}
     tracks: dict[int, TrackSet] = {}
     with InProcessRos(executor="events") as ros:

@@ -22,7 +22,7 @@ from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm.nodes.voronoi_wire import WIRE
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
 
 GRID = sc.dames_static().grid
 MAX_MEASUREMENTS = 50

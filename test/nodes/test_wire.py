@@ -15,7 +15,7 @@ from phd_swarm.core.registry import Part, lookup
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm.nodes.voronoi_wire import WIRE
 from phd_swarm.nodes.wire import wire_for
-from phd_swarm.sim import scenario as sc
+from phd_swarm.sim import presets as sc
 
 
 def test_voronoi_phd_names_its_wire_and_it_round_trips_addressed_messages():

@@ -12,7 +12,7 @@ from phd_swarm.core.grid import Environment
 from phd_swarm.sim.lifetimes import alive_steps, in_area_lifetimes
 from phd_swarm.sim.ncv_paths import NcvPaths, truncated_geometric_p
 from phd_swarm.sim.ncv_targets import NcvTargets
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 from phd_swarm.sim.targets import make_targets
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)

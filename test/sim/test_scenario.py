@@ -7,15 +7,10 @@ import math
 import pytest
 
 from phd_swarm.core import models as core_models
-from phd_swarm.sim.scenario import (
-    PRESETS,
-    Scenario,
-    TargetConfig,
-    chen_clustered,
-    dames_moving,
-    dames_static,
-    scenario_from_dict,
-)
+from phd_swarm.core.extraction import ExtractionConfig
+from phd_swarm.sim.presets import PRESETS, chen_clustered, dames_moving, dames_static
+from phd_swarm.sim.scenario import EXTRACTION_WINDOW_M, Scenario, TargetConfig
+from phd_swarm.sim.scenario_dict import scenario_from_dict
 
 
 def test_dames_static_preset():
@@ -194,7 +189,8 @@ def test_scenario_is_hashable_and_comparable():
 
 
 def test_birth_heading_is_read_from_the_config_and_checked():
-    from phd_swarm.sim.scenario import dames_moving, scenario_from_dict
+    from phd_swarm.sim.presets import dames_moving
+    from phd_swarm.sim.scenario_dict import scenario_from_dict
 
     assert dames_moving().targets.birth_heading == "inward"
     sc = scenario_from_dict({"preset": "dames_moving",
@@ -250,3 +246,22 @@ def test_robot_start_grid_round_trips_and_leaves_existing_config_hashes_alone():
     assert h == config_hash(base.with_overrides(robot_start_grid=None), "phd", "ospa",
                             (0.0, 1.0))
     assert config_hash(on, "phd", "ospa", (0.0, 1.0)) != h
+
+
+def test_the_extraction_window_is_the_grid_estimators_option():
+    s = chen_clustered(robots=5, resolution=0.5)
+    # The default is the one from before the options (Dames' 3 bins of 1 m, in metres).
+    assert s.extraction == ExtractionConfig(threshold_per_m2=0.05,
+                                            neighbourhood_m=EXTRACTION_WINDOW_M)
+    assert s.system.option("extraction_window") == EXTRACTION_WINDOW_M
+    small = s.with_system(options={"extraction_window": 1.5})
+    assert small.extraction.window_bins(small.grid) == 3
+    disk = s.with_system(options={"extraction_radius": 1.0})
+    assert disk.extraction.radius_m == 1.0 and disk.extraction.footprint(disk.grid).sum() == 13
+    doc = {"preset": "chen_clustered", "resolution": 1.0,
+           "system": {"options": {"extraction_radius": 0.5}}}
+    with pytest.raises(ValueError, match=r"cfg\.yaml: system\.options\.extraction_radius: "
+                                         r"a radius of 0\.5 m is below the bin side"):
+        scenario_from_dict(doc, where="cfg.yaml")
+    with pytest.raises(ValueError, match="extraction_window"):
+        s.with_system(options={"extraction_window": 0.0})

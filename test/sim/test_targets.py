@@ -7,7 +7,7 @@ import pytest
 
 from phd_swarm.core.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
-from phd_swarm.sim.scenario import chen_clustered, dames_moving, dames_static
+from phd_swarm.sim.presets import chen_clustered, dames_moving, dames_static
 from phd_swarm.sim.targets import (
     BIRTH_HEADINGS,
     ClusteredWalkers,

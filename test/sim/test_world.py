@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from phd_swarm.core.models import DiskDetection, PhdModels, UniformClutter
-from phd_swarm.sim.scenario import TargetConfig, chen_clustered, dames_moving, dames_static
+from phd_swarm.sim.presets import chen_clustered, dames_moving, dames_static
+from phd_swarm.sim.scenario import TargetConfig
 from phd_swarm.sim.world import World
 
 
@@ -216,7 +217,7 @@ def test_a_robot_started_on_the_grid_walks_on_it():
 
 
 def test_a_layout_seed_gives_the_same_targets_whatever_the_run_seed():
-    from phd_swarm.sim.scenario import shirsat_berman
+    from phd_swarm.sim.presets import shirsat_berman
 
     base = shirsat_berman(side=15.0, robots=20, targets=10)
     fixed = [World(base.with_overrides(seed=s)).truth()[1] for s in (0, 1)]

@@ -38,6 +38,29 @@ class Decision:
 
 
 @dataclass(frozen=True)
+class PowerWeightGuard:
+    """A bound on the power weights, applied where the team's partition is computed.
+
+    A controller part whose options need one declares the hook
+    ``extras["power_weight_guard"](setup) -> PowerWeightGuard | None`` (None: no bound).
+    The central engine applies ``bound`` to the robots' weights at their positions before
+    each partition; a robot of the distributed protocol knows only its contacts' states,
+    not the positions the bound needs, so :class:`~phd_swarm.core.agent.Agent` refuses a
+    system that declares one.
+
+    Attributes
+    ----------
+    option : str
+        The option that asks for the bound, for errors (e.g. ``rho_cap: nearest_robot``).
+    bound : callable
+        ``bound(positions (R, 2), rho (R,)) -> rho' (R,)`` [m], rows ordered by robot id.
+    """
+
+    option: str
+    bound: Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
 class CellDensity:
     """What a robot of a partitioned grid-PHD system knows of its own cell.
 

@@ -8,7 +8,8 @@ the PHD recursion keeps that form (Vo & Ma 2006, Propositions 1-2). This module 
 - :class:`GaussianMixture`: the intensity as plain arrays;
 - :func:`predict` (Table I steps 1-2), :func:`update` (Table I steps 3-4, with a detection
   probability per component), :func:`prune_and_merge` (Table II, its arithmetic in
-  :mod:`.gm_reduce`), :func:`extract` (Table III);
+  :mod:`.gm_reduce`; :func:`prune_and_merge_carrying` also sums what the components
+  carry), :func:`extract` (Table III);
 - :func:`linear_terms` and :func:`update_with_terms`: the update split in two, so that a
   nonlinear measurement model (:mod:`.range_bearing`) only supplies the Kalman terms.
 
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .checks import check_finite, check_measurements, check_probability, check_spd
-from .gm_reduce import check_merge_metric, reduce_components
+from .gm_reduce import carry, check_merge_metric, reduce_components, reduce_with_sources
 
 #: p_D evaluator: (means (J, d), covs (J, d, d), sensor position (2,) [m]) -> p_D (J,).
 DetectionProbability = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -521,6 +522,21 @@ def prune_and_merge(mix: GaussianMixture, model: GmPhdModel) -> GaussianMixture:
     return GaussianMixture(*reduce_components(
         mix.weights, mix.means, mix.covs, model.prune_threshold, model.merge_threshold,
         model.max_components, model.merge_metric))
+
+
+def prune_and_merge_carrying(mix: GaussianMixture, model: GmPhdModel, values: np.ndarray
+                             ) -> tuple[GaussianMixture, np.ndarray]:
+    """:func:`prune_and_merge` (the same mixture, bit for bit), carrying ``values`` along.
+
+    ``values`` (J, ...) is what each input component carries (e.g. the weight each
+    measurement gave it); each output row gets the sum over the inputs merged into it,
+    pruned and capped inputs' values are dropped (:func:`.gm_reduce.carry`).
+    """
+    _check_mixture(mix, model)
+    w, m, p, source = reduce_with_sources(
+        mix.weights, mix.means, mix.covs, model.prune_threshold, model.merge_threshold,
+        model.max_components, model.merge_metric)
+    return GaussianMixture(w, m, p), carry(source, values, w.shape[0])
 
 
 def extract(mix: GaussianMixture, model: GmPhdModel) -> np.ndarray:

@@ -36,6 +36,7 @@ from .gm_phd import (
     linear_terms,
     predict,
     prune_and_merge,
+    prune_and_merge_carrying,
     update_with_terms,
 )
 
@@ -149,6 +150,19 @@ class GmPhdEstimator(Estimator):
         wide birth prior re-issued at the sensor each step and p_S = 1, ``keep`` piles the
         undetected newborns up (about (1 - p_D) of each birth: 0.65 of it with the
         integrated p_D of a 25 m-sd birth in a 25 m disk), see docs/benchmarks.md.
+    record_shares : bool
+        Keep :attr:`shares` after each update (off by default: the filter is the same
+        either way, bit for bit).
+
+    Attributes
+    ----------
+    shares : np.ndarray, shape (J, M) or None
+        With ``record_shares``, after an update with M measurements: how much of the weight
+        of each of the J components of :attr:`mixture` came from each measurement. A
+        detection term of component j by z brings its weight w_j(z) (Table I step 4) to the
+        component it is merged into (Table II, :func:`.gm_reduce.reduce_with_sources`); a
+        newborn of :class:`.gm_births.PerMeasurementBirth` brings its weight to its own
+        row; missed-detection terms bring nothing. Row sums are at most the weights.
     """
 
     def __init__(self, model: GmPhdModel, mixture: GaussianMixture | None = None,
@@ -157,7 +171,8 @@ class GmPhdEstimator(Estimator):
                  birth: BirthRule = None,
                  fov_push: tuple[float, float] | None = None,
                  fov_push_to: str = "paper",
-                 undetected_births: str = "keep") -> None:
+                 undetected_births: str = "keep",
+                 record_shares: bool = False) -> None:
         if model.dim < 2:
             raise ValueError(f"GmPhdEstimator needs a state whose first two coordinates are "
                              f"the position, got d={model.dim}")
@@ -185,6 +200,8 @@ class GmPhdEstimator(Estimator):
         self._p_d = constant_p_d(0.9) if p_d is None else p_d
         self._newborn = np.zeros(len(self.mixture), dtype=bool)
         self._proposed = GaussianMixture.empty(model.dim)
+        self.record_shares = bool(record_shares)
+        self.shares: np.ndarray | None = None
 
     def predict(self) -> None:
         """Births, spawns and survivors (Table I steps 1-2), then last scan's newborns."""
@@ -216,7 +233,15 @@ class GmPhdEstimator(Estimator):
             posterior, shares = result.mixture, result.detection_weights
         if self.fov_push is not None:
             posterior = self._push_from_fov(posterior, p_d, sensor)
-        self.mixture = prune_and_merge(posterior, self.model)
+        if self.record_shares:
+            # Posterior rows: the J missed terms, then J detection terms per measurement.
+            n, m = len(mix), len(z)
+            brought = np.zeros((n * (1 + m), m))
+            brought[n + np.arange(n * m), np.repeat(np.arange(m), n)] = shares.reshape(-1)
+            self.mixture, self.shares = prune_and_merge_carrying(posterior, self.model,
+                                                                 brought)
+        else:
+            self.mixture = prune_and_merge(posterior, self.model)
         self._newborn = np.zeros(len(self.mixture), dtype=bool)
         if self.birth is None or len(z) == 0:
             return
@@ -231,6 +256,8 @@ class GmPhdEstimator(Estimator):
                 np.concatenate([self.mixture.means, new.means]),
                 np.concatenate([self.mixture.covs, new.covs]))
             self._newborn = np.zeros(len(self.mixture), dtype=bool)
+            if self.record_shares:
+                self.shares = np.concatenate([self.shares, np.diag(new.weights)])
 
     def _push_from_fov(self, posterior: GaussianMixture, p_d: np.ndarray,
                        sensor: np.ndarray) -> GaussianMixture:
@@ -303,3 +330,4 @@ class GmPhdEstimator(Estimator):
                              f"{self.model.dim}")
         self.mixture = mix
         self._newborn = np.zeros(len(mix), dtype=bool)
+        self.shares = None

@@ -30,7 +30,8 @@ import numpy as np
 
 from ..params import ParamSpec
 
-__all__ = ["MERGE_METRICS", "MERGE_METRIC_OPTION", "check_merge_metric", "reduce_components"]
+__all__ = ["MERGE_METRICS", "MERGE_METRIC_OPTION", "carry", "check_merge_metric",
+           "reduce_components", "reduce_with_sources"]
 
 #: The merge tests: the metric of the heaviest component j, or of each candidate i.
 MERGE_METRICS = ("heaviest", "candidate")
@@ -90,11 +91,49 @@ def reduce_components(weights: np.ndarray, means: np.ndarray, covs: np.ndarray,
     weights (K,), means (K, d), covs (K, d, d)
         K <= J_max components, heaviest first (stable among equal weights).
     """
+    w, m, p, _ = _reduce(weights, means, covs, prune, merge, cap, metric, False)
+    return w, m, p
+
+
+def reduce_with_sources(weights: np.ndarray, means: np.ndarray, covs: np.ndarray,
+                        prune: float, merge: float, cap: int, metric: str = "candidate"
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`reduce_components`, and where each input component went.
+
+    The same components, bit for bit, and ``source`` (J,) int: the row of the output that
+    input component i was merged into, -1 if it was pruned (weight <= T) or its group was
+    capped away (beyond J_max). What the inputs carry (:func:`carry`) follows them.
+    """
+    return _reduce(weights, means, covs, prune, merge, cap, metric, True)
+
+
+def carry(source: np.ndarray, values: np.ndarray, rows: int) -> np.ndarray:
+    """Sum ``values`` (J, ...) of the inputs of a reduction into its ``rows`` outputs.
+
+    ``source`` (J,) is :func:`reduce_with_sources`'s; inputs with source -1 are dropped.
+    The sums are taken in input order (``np.add.at``), so they are deterministic.
+
+    Returns
+    -------
+    np.ndarray, shape (rows, ...)
+    """
+    values = np.asarray(values, dtype=float)
+    out = np.zeros((rows, *values.shape[1:]))
+    kept = source >= 0
+    np.add.at(out, source[kept], values[kept])
+    return out
+
+
+def _reduce(weights: np.ndarray, means: np.ndarray, covs: np.ndarray, prune: float,
+            merge: float, cap: int, metric: str, want_sources: bool
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """:func:`reduce_components`, with the inputs' output rows if ``want_sources``."""
     check_merge_metric(metric)
     keep = weights > prune
     w, m, p = weights[keep], means[keep], covs[keep]
+    source = np.full(weights.shape[0], -1) if want_sources else None
     if w.size == 0:
-        return w, m, p
+        return w, m, p, source
     n = w.size
     labels = np.full(n, -1)
     taken = np.zeros(n, dtype=bool)
@@ -111,7 +150,10 @@ def reduce_components(weights: np.ndarray, means: np.ndarray, covs: np.ndarray,
         spec = "ijd,ide,ije->ij" if metric == "candidate" else "ijd,jde,ije->ij"
         close = np.einsum(spec, diff, p_inv, diff) <= merge
         if np.count_nonzero(close) == n:
-            return _singletons(w, m, p, order[:cap])
+            if want_sources:
+                # Every component its own group: output row r is input order[r].
+                source[np.flatnonzero(keep)[order[:cap]]] = np.arange(min(cap, n))
+            return (*_singletons(w, m, p, order[:cap]), source)
     elif metric == "candidate":
         p_inv = np.linalg.inv(p)
     # Greedy grouping: the heaviest component not yet taken (argmax: the lowest index among
@@ -144,7 +186,11 @@ def reduce_components(weights: np.ndarray, means: np.ndarray, covs: np.ndarray,
     cov = np.add.reduceat(spread, starts) / w_sum[:, None, None]
     cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
     order = np.argsort(-w_sum, kind="stable")[:cap]
-    return w_sum[order], mean[order], cov[order]
+    if want_sources:
+        row = np.full(n_groups, -1)
+        row[order] = np.arange(order.size)
+        source[np.flatnonzero(keep)] = row[labels]
+    return w_sum[order], mean[order], cov[order], source
 
 
 def _singletons(w: np.ndarray, m: np.ndarray, p: np.ndarray,

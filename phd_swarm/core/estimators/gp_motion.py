@@ -51,11 +51,16 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.linalg import cho_solve
 from scipy.optimize import minimize
 
 from .checks import check_finite, check_positive_int
 
 MEANS = ("zero", "window")
+
+#: What :func:`predict_next` caches across calls: the weights by the offsets k - K, or
+#: the Cholesky factor by the gaps between the steps K.
+CACHES = ("offsets", "gaps")
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
@@ -135,7 +140,7 @@ def _steps(name: str, v: np.ndarray) -> np.ndarray:
 
 
 def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
-                 hp: GpHyperparameters) -> np.ndarray:
+                 hp: GpHyperparameters, cache: str = "offsets") -> np.ndarray:
     """GP posterior means of N tracks at one step each (Sung & Tokekar eq. 8), batched.
 
     Every track has the same number W of points (the caller groups tracks by length:
@@ -145,6 +150,14 @@ def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
     pattern, cached across calls (a track associated at every step has the same pattern
     at every step), so a step costs O(W d) per track once its pattern is known, O(W^3)
     for a new pattern.
+
+    A track whose history stops growing (fed only by detections, out of view) has a new
+    offset pattern at every step. ``cache = "gaps"`` serves it: the Cholesky factor of
+    ``K(K, K) + sigma_n^2 I`` depends only on the gaps between the steps K, so it is
+    cached by those (the same for the whole time a history does not change, and for a
+    track detected at every step), and ``a`` is two triangular solves, O(W^2), per call.
+    The two caches give the same ``a`` to rounding, not bit for bit; ``offsets`` is the
+    form the committed results were made with.
 
     Parameters
     ----------
@@ -156,12 +169,16 @@ def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
         The step to predict each track at.
     hp : GpHyperparameters
         Kernel, noise and prior mean (``hp.window`` is not used here).
+    cache : {"offsets", "gaps"}
+        What is cached across calls (see above).
 
     Returns
     -------
     np.ndarray, shape (N, d)
         Predicted means [units of the state].
     """
+    if cache not in CACHES:
+        raise ValueError(f"cache must be one of {CACHES}, got {cache!r}")
     times = np.asarray(times, dtype=float)
     means = np.asarray(means, dtype=float)
     k_next = np.asarray(k_next, dtype=float)
@@ -188,8 +205,29 @@ def predict_next(times: np.ndarray, means: np.ndarray, k_next: np.ndarray,
     # the offsets W, ..., 1 at every step, so the distinct offset patterns are few: each
     # is solved once and cached (:func:`_weights`).
     offsets = np.ascontiguousarray(k_next[:, None] - times)           # (N, W)
-    weights = np.stack([_weights(row.tobytes(), w, hp) for row in offsets])
+    if cache == "offsets":
+        weights = np.stack([_weights(row.tobytes(), w, hp) for row in offsets])
+    else:
+        gaps = np.ascontiguousarray(times - times[:, -1:])            # (N, W)
+        weights = np.stack([
+            cho_solve((_factor(g.tobytes(), w, hp), True),
+                      _se(o, hp.signal_sd, hp.length_scale), check_finite=False)
+            for g, o in zip(gaps, offsets, strict=True)])
     return prior + np.einsum("nw,nwd->nd", weights, resid)
+
+
+@lru_cache(maxsize=4096)
+def _factor(gaps: bytes, w: int, hp: GpHyperparameters) -> np.ndarray:
+    """Lower Cholesky factor of ``K(K, K) + sigma_n^2 I`` for the steps ``K - K_W`` (bytes).
+
+    Read-only (shared through the cache).
+    """
+    t = np.frombuffer(gaps, dtype=float, count=w)
+    gram = _se(t[:, None] - t[None, :], hp.signal_sd, hp.length_scale)
+    gram[np.arange(w), np.arange(w)] += hp.noise_sd**2
+    chol = np.linalg.cholesky(gram)
+    chol.flags.writeable = False
+    return chol
 
 
 @lru_cache(maxsize=4096)
@@ -234,7 +272,8 @@ def _track_pair(item: object, where: str, values: str, dim: int | None,
 
 
 def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
-                   k_next: float | np.ndarray, hp: GpHyperparameters) -> np.ndarray:
+                   k_next: float | np.ndarray, hp: GpHyperparameters,
+                   cache: str = "offsets") -> np.ndarray:
     """Predicted means of N tracks of any length at a step (eq. 8 on the last points).
 
     Each track contributes its last ``min(T_i, hp.window)`` points; tracks are grouped by
@@ -251,6 +290,8 @@ def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
         The step to predict at, one for all tracks or one per track.
     hp : GpHyperparameters
         Kernel, noise, window and prior mean.
+    cache : {"offsets", "gaps"}
+        What :func:`predict_next` caches: ``gaps`` for histories that stop growing.
 
     Returns
     -------
@@ -286,7 +327,7 @@ def predict_tracks(histories: Sequence[tuple[np.ndarray, np.ndarray]],
             out[idx] = states[:, 0, :]
             continue
         times = np.stack([steps_list[i] for i in idx])
-        out[idx] = predict_next(times, states, k_next[idx], hp)
+        out[idx] = predict_next(times, states, k_next[idx], hp, cache)
     return out
 
 

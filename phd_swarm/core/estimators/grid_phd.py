@@ -8,6 +8,12 @@ their masses move from robot to robot with its cell, so they are held and update
 (:mod:`phd_swarm.core.exchange.voronoi_phd.participant`); what a robot reads from its own
 bins is :class:`GridPhdEstimator`: the estimates (extraction over the window around the
 cell, Dames Sec. IV) and the expected number of targets.
+
+Options: the extraction's window, ``extraction_window`` (the side of the square, in metres,
+Dames' 3 bins of 1 m) or ``extraction_radius`` (a disk instead, > 0), read by
+:attr:`phd_swarm.sim.scenario.Scenario.extraction`, so that every reader of the team PHD
+(the robots, the central filter, the sweeps, the monitor, ``evaluate``) extracts alike
+(:mod:`phd_swarm.core.extraction`; docs/decisions.md, "The extraction floor").
 """
 
 from __future__ import annotations
@@ -20,7 +26,20 @@ import numpy as np
 from .. import registry
 from ..extraction import ExtractionConfig, expected_cardinality, extract_targets
 from ..grid import Environment, Grid
+from ..params import ParamSpec
 from .central_phd import CentralPhdFilter
+
+#: The extraction's window (:class:`~phd_swarm.core.extraction.ExtractionConfig`); the
+#: defaults are the scenarios' (``phd_swarm.sim.scenario.EXTRACTION_WINDOW_M``).
+OPTIONS = (
+    ParamSpec("extraction_window", 3.0, "grid_phd: side [m] of the square window in which "
+              "an extracted peak is the largest bin (Dames Sec. IV: 3 bins of 1 m); at "
+              "least 3 bins.", low=1e-3, high=1e3),
+    ParamSpec("extraction_radius", 0.0, "grid_phd: 0 uses the square window; > 0, a peak "
+              "is the largest bin within this radius [m] instead, so any two peaks farther "
+              "apart are both extracted; at least the bin side (docs/decisions.md).",
+              low=0.0, high=1e3),
+)
 
 
 @dataclass(frozen=True)
@@ -76,5 +95,6 @@ def central_filter(scenario: Any) -> CentralPhdFilter:
 registry.register(
     "estimator", "grid_phd", lambda estimator, rid: estimator, setup=_setup,
     description="Grid PHD filter (Dames 2020 eq. 3-6), distributed over the robots' cells.",
-    provides=("grid_density",), requires=("disk_fov", "position_measurement"),
+    options=OPTIONS, provides=("grid_density",),
+    requires=("disk_fov", "position_measurement"),
     central=central_filter, runs_in_exchange=True)

@@ -6,7 +6,9 @@ the order of the paper's flowchart (Fig. 4; section numbers are the paper's):
 1. prediction (Alg. 1 steps 1-2): F = I, Q = ``process_noise_sd``^2 I, p_S = 1; with
    ``gp_prediction`` the mean of every component that carried a confirmed track at the last
    step is replaced by the GP prediction of eq. 8 from the track's recent history
-   (:mod:`.gp_motion`, Sec. V-B); the others keep the linear model;
+   (:mod:`.gp_motion`, Sec. V-B): its extracted targets (``gp_input = estimates``) or only
+   its detections (``detections``, :mod:`.gp_detections`); the others keep the linear
+   model;
 2. update (Alg. 1 step 4): p_D = p(D|F) p(F) (eq. 9) with p(F) the component's Gaussian
    mass in the FoV disk (eq. 10, :class:`.detection.DiskFov`), the missed-detection terms
    between the p_D thresholds pushed away from the robot (eq. 11, ``fov_rule``), the
@@ -23,7 +25,9 @@ the order of the paper's flowchart (Fig. 4; section numbers are the paper's):
    (``extraction = per_component``, the paper's "turns some components into targets"),
    or round(w) copies of its mean (``rounded``, Vo & Ma Table III);
 6. tracks (Layer 3, Sec. V-F): :class:`.tracks.TrackLayer` with the merging threshold as
-   gate and l_threshold = ``confirm_after``.
+   gate and l_threshold = ``confirm_after``; with ``gp_input = detections`` each track's
+   detection of the step, the measurement its target's component is mostly made of
+   (:func:`.gp_detections.majority_measurement`), is added to its detection history.
 
 The initial belief (Sec. V-A, VI-A) comes from an "external source": with
 ``initial_belief`` = ``exact`` one component per true target (``scenario.initial_truth``),
@@ -48,9 +52,10 @@ from ..scan import Scan
 from .base import Estimator
 from .detection import DiskFov
 from .gm_births import PerMeasurementBirth
-from .gm_phd import GaussianMixture, GmPhdModel, prune_and_merge
+from .gm_phd import GaussianMixture, GmPhdModel, prune_and_merge, prune_and_merge_carrying
 from .gm_phd_estimator import GmPhdEstimator
 from .gm_reduce import MERGE_METRIC_OPTION
+from .gp_detections import GP_INPUT_OPTION, DetectionHistories, majority_measurement
 from .gp_motion import GpHyperparameters, predict_tracks
 from .sung_figures import step_figures
 from .tracks import TrackLayer
@@ -108,6 +113,7 @@ OPTIONS = (
               "[m^2] (Sec. VI-A.1)", low=0.0),
     ParamSpec("gp_prediction", False, "sung_gmphd: predict the components of confirmed "
               "tracks by GP regression (Sec. V-B, eq. 7-8)"),
+    GP_INPUT_OPTION,
     ParamSpec("gp_signal_sd", 16.67, "sung_gmphd: GP signal sd sigma_f [m] (eq. 7; default "
               "fitted by tools/fit_gp.py on the turning walk)", low=0.0),
     ParamSpec("gp_length_scale", 472.0, "sung_gmphd: GP length-scale lambda [steps] (eq. 7)",
@@ -131,6 +137,7 @@ class SungSetup:
     merge_newborns: bool
     gp: GpHyperparameters | None
     initial: GaussianMixture
+    gp_input: str = "estimates"
 
 
 class SungEstimator(Estimator):
@@ -142,15 +149,20 @@ class SungEstimator(Estimator):
         Layer 1, the components (``gmphd.mixture``).
     tracks : TrackLayer
         Layer 3.
+    detections : DetectionHistories or None
+        Each track's detections (``gp_prediction`` with ``gp_input = detections`` only).
     step : int
         The step of the last update (-1 before the first).
     """
 
     def __init__(self, setup: SungSetup) -> None:
         self.setup = setup
+        on_detections = setup.gp is not None and setup.gp_input == "detections"
         self.gmphd = GmPhdEstimator(setup.model, setup.initial, p_d=setup.fov,
                                     birth=PerMeasurementBirth(1.0), fov_push=setup.fov_push,
-                                    fov_push_to=setup.fov_push_to)
+                                    fov_push_to=setup.fov_push_to,
+                                    record_shares=on_detections)
+        self.detections = DetectionHistories() if on_detections else None
         self.tracks = TrackLayer(setup.model.merge_threshold, setup.confirm_after)
         self.step = -1
         self._component_track = np.full(len(setup.initial), -1)
@@ -175,12 +187,19 @@ class SungEstimator(Estimator):
         tracks, need = self.tracks.tracks, self.tracks.confirm_after
         rows = [i for i, tid in enumerate(carried.tolist())
                 if tid >= 0 and tracks[tid].life >= need]
+        w = self.setup.gp.window
+        if self.detections is None:
+            histories = [tracks[carried[i]].window(w) for i in rows]
+        else:
+            # A confirmed track never detected has nothing to regress on: F = I.
+            rows = [i for i in rows if self.detections.count(carried[i])]
+            histories = [self.detections.window(carried[i], w) for i in rows]
         if not rows:
             return
-        w = self.setup.gp.window
-        histories = [tracks[carried[i]].window(w) for i in rows]
+        # A detection history stops growing out of view: cache its factor, not its weights.
         predicted = predict_tracks(histories, np.full(len(rows), self.step + 1.0),
-                                   self.setup.gp)
+                                   self.setup.gp,
+                                   "offsets" if self.detections is None else "gaps")
         mix = self.gmphd.mixture
         means = mix.means.copy()
         means[rows, :2] = predicted
@@ -190,8 +209,13 @@ class SungEstimator(Estimator):
         """Alg. 1 step 4, pruning and merging, new components, targets and tracks."""
         self.gmphd.update(scan)
         self.step = int(scan.step)
+        shares = self.gmphd.shares
         if self.setup.merge_newborns and len(scan.z):
-            self.gmphd.mixture = prune_and_merge(self.gmphd.mixture, self.setup.model)
+            if self.detections is None:
+                self.gmphd.mixture = prune_and_merge(self.gmphd.mixture, self.setup.model)
+            else:
+                self.gmphd.mixture, shares = prune_and_merge_carrying(
+                    self.gmphd.mixture, self.setup.model, shares)
         mix = self.gmphd.mixture
         sel = np.flatnonzero(mix.weights > self.setup.model.extraction_threshold)
         if self.setup.rounded_extraction:
@@ -207,6 +231,20 @@ class SungEstimator(Estimator):
         self._target_covs = mix.covs[component][:, :2, :2]
         self._target_weights = mix.weights[component]
         self._target_tracks = ids
+        if self.detections is not None and len(scan.z):
+            self._record_detections(scan, shares, component, ids)
+
+    def _record_detections(self, scan: Scan, shares: np.ndarray, component: np.ndarray,
+                           ids: np.ndarray) -> None:
+        """Each target's track gets the measurement its component is mostly made of."""
+        mix = self.gmphd.mixture
+        z_of = majority_measurement(shares, mix.weights)[component]
+        hit = z_of >= 0
+        if not hit.any():
+            return
+        # A component repeated by rounded extraction is on as many tracks: one z each.
+        positions, _ = self.gmphd.measurement.positions(scan.z, scan.sensor)
+        self.detections.record(self.step, ids[hit], positions[z_of[hit]])
 
     # ------------------------------------------------------------ layers 2 and 3
     def estimates(self) -> np.ndarray:
@@ -327,7 +365,7 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SungSetup:
                              scenario.env, rng)
     return SungSetup(model, fov, (lower, upper) if opt("fov_rule") else None,
                      opt("fov_push_to"), int(opt("confirm_after")), opt("extraction") == "rounded",
-                     opt("newborn_merge") == "same_step", gp, initial)
+                     opt("newborn_merge") == "same_step", gp, initial, str(opt("gp_input")))
 
 
 registry.register(

@@ -11,7 +11,7 @@ from phd_swarm.core.exchange.sat_share import SatMsg, SatShare, SatView
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.square_range_bearing import simulate_scan
 from phd_swarm.core.tracking_overlap import pick_switcher
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 
 
 def _parts(robot_id=0, **options):

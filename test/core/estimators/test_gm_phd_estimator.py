@@ -255,3 +255,34 @@ def test_undetected_births_keep_a_missed_term_or_are_dropped():
                                sorted([w_det, 0.05 * (1.0 - p_d)]), rtol=1e-9)
     with pytest.raises(ValueError, match="undetected_births"):
         GmPhdEstimator(model, undetected_births="forget")
+
+
+@pytest.mark.parametrize("birth", [None, PerMeasurementBirth(1.0)])
+def test_the_shares_follow_each_measurement_through_the_reduction(birth):
+    # One component at the origin, a measurement near it and one far away.
+    start = GaussianMixture(np.array([1.0]), np.zeros((1, 2)), np.eye(2)[None])
+    z = np.array([[0.5, 0.0], [50.0, 0.0]])
+    plain = GmPhdEstimator(_static_model(), start, p_d=constant_p_d(0.9), birth=birth)
+    est = GmPhdEstimator(_static_model(), start, p_d=constant_p_d(0.9), birth=birth,
+                         record_shares=True)
+    for e in (plain, est):
+        e.predict()
+        e.update(_scan(0, z))
+    # The filter is the same, bit for bit.
+    for key, value in plain.mixture.to_arrays().items():
+        assert np.array_equal(value, est.mixture.to_arrays()[key])
+    assert plain.shares is None
+    # By hand: S = P + Q + R = 1.26 I; w(z) = p q(z) / (kappa + p q(z)), the far term
+    # ~0 (pruned). The missed term (0.1) and z's detection term merge into one component.
+    q = np.exp(-0.5 * 0.25 / 1.26) / (2.0 * np.pi * 1.26)
+    w_z = 0.9 * q / (1e-3 + 0.9 * q)
+    expected = [[w_z, 0.0]] + ([[1.0, 0.0], [0.0, 1.0]] if birth else [])
+    np.testing.assert_allclose(est.shares, expected, rtol=1e-12)
+    assert est.mixture.weights[0] == pytest.approx(0.1 + w_z, rel=1e-12)
+    assert np.all(est.shares.sum(axis=1) <= est.mixture.weights + 1e-12)
+    # An empty scan: no shares; an import forgets them.
+    est.predict()
+    est.update(_scan(1, np.empty((0, 2))))
+    assert est.shares.shape == (len(est.mixture), 0)
+    est.import_state(start.to_arrays())
+    assert est.shares is None

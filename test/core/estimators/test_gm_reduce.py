@@ -204,6 +204,40 @@ def test_candidate_is_the_reduction_of_before_bit_for_bit(d):
         assert _same(prune_and_merge(mix, model), _table_ii_as_before(mix, model))
 
 
+@pytest.mark.parametrize("metric", METRICS)
+@pytest.mark.parametrize("path", ["pairs", "columns"])
+def test_the_sources_name_the_output_each_input_went_to(metric, path, monkeypatch):
+    if path == "columns":
+        monkeypatch.setattr(gm_reduce, "_PAIRWISE_MAX", 0)
+    rng = np.random.default_rng(5)
+    merged = 0
+    for _ in range(60):
+        mix = _random_mixture(rng, int(rng.integers(0, 30)), 2, rng.uniform(0.5, 8.0))
+        args = (1e-3, float(rng.uniform(0.5, 8.0)), int(rng.integers(1, 40)), metric)
+        w, m, p = reduce_components(mix.weights, mix.means, mix.covs, *args)
+        w2, m2, p2, source = gm_reduce.reduce_with_sources(mix.weights, mix.means,
+                                                           mix.covs, *args)
+        # The same reduction, bit for bit.
+        for x, y in ((w, w2), (m, m2), (p, p2)):
+            assert np.array_equal(x, y)
+        assert source.shape == (len(mix),) and set(source.tolist()) <= {-1, *range(len(w))}
+        assert np.all(source[mix.weights <= 1e-3] == -1)
+        # Each output is the moment match of exactly the inputs sent to it.
+        np.testing.assert_allclose(gm_reduce.carry(source, mix.weights, len(w)), w,
+                                   rtol=1e-12)
+        moments = gm_reduce.carry(source, mix.weights[:, None] * mix.means, len(w))
+        np.testing.assert_allclose(moments / w[:, None], m, rtol=1e-9, atol=1e-9)
+        merged += len(w) < np.count_nonzero(source >= 0)
+    assert merged > 10
+
+
+def test_carry_sums_rows_and_drops_the_pruned():
+    source = np.array([1, -1, 0, 1])
+    values = np.array([[1.0, 0.0], [5.0, 5.0], [0.0, 2.0], [0.5, 0.25]])
+    np.testing.assert_array_equal(gm_reduce.carry(source, values, 3),
+                                  [[0.0, 2.0], [1.5, 0.25], [0.0, 0.0]])
+
+
 def test_reduce_components_on_arrays_prunes_to_empty_arrays():
     w, m, p = reduce_components(np.array([1e-4, 2e-4]), np.zeros((2, 3)),
                                 np.broadcast_to(np.eye(3), (2, 3, 3)), 1e-3, 4.0, 10,

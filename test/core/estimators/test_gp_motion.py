@@ -198,6 +198,25 @@ def test_predict_tracks_groups_by_length_and_uses_the_last_window():
 
 
 @pytest.mark.parametrize("mean", ["window", "zero"])
+def test_the_gaps_cache_gives_eq_8_as_the_offsets_cache_does(mean):
+    rng = np.random.default_rng(8)
+    hp = GpHyperparameters(2.0, 4.0, 0.3, window=10, mean=mean)
+    times, means, k_next = _random_windows(rng, 6, 10, 2, offset=50.0)
+    # One history asked at later and later steps (a track out of view): one factor.
+    times[3:] = times[2]
+    means[3:] = means[2]
+    k_next[3:] = times[2, -1] + np.arange(1.0, 4.0)
+    gaps = predict_next(times, means, k_next, hp, cache="gaps")
+    np.testing.assert_allclose(gaps, predict_next(times, means, k_next, hp), rtol=1e-12,
+                               atol=1e-9)
+    for i in range(6):
+        np.testing.assert_allclose(gaps[i], _dense_predict(times[i], means[i], k_next[i], hp),
+                                   atol=1e-9)
+    with pytest.raises(ValueError, match="cache must be one of"):
+        predict_next(times, means, k_next, hp, cache="weights")
+
+
+@pytest.mark.parametrize("mean", ["window", "zero"])
 def test_single_point_track_predicts_that_point(mean):
     hp = GpHyperparameters(2.0, 3.0, 0.4, window=6, mean=mean)
     got = predict_tracks([([4], [[120.0, -30.0]])], 5, hp)

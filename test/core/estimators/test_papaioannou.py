@@ -10,7 +10,7 @@ from phd_swarm.core import search_map as sm
 from phd_swarm.core.estimators.papaioannou import PapaioannouEstimator, ncv_model
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.square_range_bearing import simulate_scan
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 
 
 def _estimator(robot_id=0, **options):

@@ -28,7 +28,7 @@ from phd_swarm.core.ospa import ospa
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.disk import simulate_scan
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim.scenario import scenario_from_dict
+from phd_swarm.sim.scenario_dict import scenario_from_dict
 
 #: Sec. VI's sensor: FoV radius 0.6 m, p_D 0.8, R = 0.25 I, lambda_C = 3.98e-3 per m^2.
 MODELS = PhdModels(detection=DiskDetection(p_d=0.8, radius=0.6),

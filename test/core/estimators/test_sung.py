@@ -13,7 +13,7 @@ from phd_swarm.core.estimators.sung_figures import mahalanobis_to_tracks, step_f
 from phd_swarm.core.grid import Environment
 from phd_swarm.core.scan import Scan
 from phd_swarm.engines.distributed import DistributedEngine
-from phd_swarm.sim.scenario import sung_tokekar
+from phd_swarm.sim.presets import sung_tokekar
 
 ENV = Environment(0.0, 0.0, 150.0, 150.0)
 TRUTH = np.array([[10.0 * i + 5.0, 7.0 * i + 20.0] for i in range(10)])
@@ -194,3 +194,34 @@ def test_the_merge_metric_option_reaches_the_model(options, metric):
     assert setup.model.merge_metric == metric
     with pytest.raises(ValueError, match="system.options.merge_metric"):
         sung_tokekar().with_system(options={"merge_metric": "own"})
+
+
+def test_the_gp_input_defaults_to_estimates_and_enters_the_hash_only_when_changed():
+    from phd_swarm.config.sweep_hash import config_hash
+
+    sc = sung_tokekar().with_system(options={"gp_prediction": True})
+    setup = registry.lookup("estimator", "sung_gmphd").setup(sc, sc.system)
+    assert setup.gp_input == "estimates"
+    est = SungEstimator(setup)
+    assert est.detections is None and not est.gmphd.record_shares
+    # The committed rows were made before the option: at its default the hash is theirs.
+    explicit = sc.with_system(options={"gp_input": "estimates"})
+    detections = sc.with_system(options={"gp_input": "detections"})
+    args = ("lawnmower", "mean", (0.0, 100.0), "distributed")
+    assert config_hash(explicit, *args) == config_hash(sc, *args)
+    assert config_hash(detections, *args) != config_hash(sc, *args)
+    with pytest.raises(ValueError, match="system.options.gp_input"):
+        sc.with_system(options={"gp_input": "measurements"})
+
+
+def test_fed_by_detections_runs_are_reproducible():
+    a = _engine(gp_prediction=True, gp_input="detections")
+    b = _engine(gp_prediction=True, gp_input="detections")
+    a.run(300)
+    b.run(300)
+    ea, eb = a.agents[0].estimator, b.agents[0].estimator
+    for x, y in zip(ea.mixture.to_arrays().values(), eb.mixture.to_arrays().values(),
+                    strict=True):
+        assert np.array_equal(x, y)
+    assert np.array_equal(ea.targets()[3], eb.targets()[3])
+    assert any(ea.detections.count(t.track_id) >= 3 for t in ea.tracks.confirmed())

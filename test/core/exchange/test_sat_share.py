@@ -7,7 +7,7 @@ import numpy as np
 from phd_swarm.core import registry
 from phd_swarm.core.exchange.radio import RangeRadio
 from phd_swarm.core.exchange.sat_share import SatMsg, SatShare
-from phd_swarm.sim.scenario import PRESETS
+from phd_swarm.sim.presets import PRESETS
 
 
 class _Controller:
