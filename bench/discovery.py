@@ -87,6 +87,7 @@ def run(mode: str, n: int, duration: float, domain: int,
     server = None
     lines: list[list[dict]] = [[] for _ in range(n)]
     usage: dict[int, tuple[float, float]] = {}
+    stuck: dict[int, str] = {}
 
     def read(i: int, proc: subprocess.Popen) -> None:
         for line in proc.stdout:
@@ -110,8 +111,11 @@ def run(mode: str, n: int, duration: float, domain: int,
         t0 = time.time()
         threads = []
         for i in range(n):
+            # Each peer's stderr goes to a file: a peer that does not exit is asked for
+            # its stack (faulthandler on SIGUSR1), which the row then names.
             proc = subprocess.Popen([sys.executable, str(PEER), str(i), str(duration)],
-                                    env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                    env=env, stdout=subprocess.PIPE,
+                                    stderr=(work / f"peer{i}.err").open("w"),
                                     text=True, start_new_session=True)
             procs.append(proc)
             th = threading.Thread(target=read, args=(i, proc), daemon=True)
@@ -138,6 +142,7 @@ def run(mode: str, n: int, duration: float, domain: int,
                 time.sleep(0.1)
         for th in threads:
             th.join(timeout=5.0)
+        stuck = _stacks_of_stuck(procs, usage, work)
     finally:
         for p in [*procs, server]:
             if p is not None and p.poll() is None and p.pid not in usage:
@@ -162,7 +167,18 @@ def run(mode: str, n: int, duration: float, domain: int,
             "min_seen": min(peaks) if peaks else 0,
             "cpu_s": round(cpu, 1), "cpu_s_per_process": round(cpu / n, 2),
             "max_rss_mb": round(max((u[1] for u in usage.values()), default=0.0), 1),
-            "exited": len(usage)}
+            "exited": len(usage), "stuck": stuck}
+
+
+def _stacks_of_stuck(procs: list[subprocess.Popen], usage: dict[int, tuple[float, float]],
+                     work: Path) -> dict[int, str]:
+    """Peers not reaped by the deadline: index -> the end of their stderr and stack dump."""
+    stuck = {i: p for i, p in enumerate(procs) if p.pid not in usage and p.poll() is None}
+    for p in stuck.values():
+        p.send_signal(signal.SIGUSR1)
+    if stuck:
+        time.sleep(1.0)
+    return {i: (work / f"peer{i}.err").read_text()[-4000:] for i in stuck}
 
 
 def main(argv: list[str] | None = None) -> int:

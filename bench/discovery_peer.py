@@ -9,7 +9,9 @@ DURATION_S has passed or it is interrupted (SIGINT), then exits 0. The environme
 
 from __future__ import annotations
 
+import faulthandler
 import json
+import signal
 import sys
 import time
 
@@ -22,6 +24,8 @@ TOPIC = "/phd_swarm_discovery"
 
 def main(index: int, duration: float) -> int:
     """Run the peer for ``duration`` seconds, reporting what it sees."""
+    # The parent asks a peer that does not exit for its stack (bench/discovery.py).
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     rclpy.init()
     node = rclpy.create_node(f"discovery_peer_{index}")
     node.create_publisher(Empty, TOPIC, 10)

@@ -197,6 +197,6 @@ def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
     result = _bench("discovery", "--quick", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
     (row,) = json.loads(next(tmp_path.glob("discovery-*.json")).read_text())["results"]
-    assert (row["mode"], row["processes"], row["exited"]) == ("profile", 10, 10)
+    assert (row["mode"], row["processes"], row["exited"]) == ("profile", 10, 10), row["stuck"]
     assert row["all_matched"] == 10 and row["min_seen"] == 10
     assert row["cpu_s"] > 0 and row["max_rss_mb"] > 0
