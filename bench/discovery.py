@@ -78,10 +78,12 @@ def run(mode: str, n: int, duration: float, domain: int,
         stop_when_matched: bool = False) -> dict[str, object]:
     """Start ``n`` peers in ``mode``; their discovery figures (see the module docstring).
 
-    With ``stop_when_matched`` the peers are stopped (SIGINT) as soon as every one of them
-    has seen all ``n`` publishers, ``duration`` being only the cap.
+    With ``stop_when_matched`` the peers are stopped (a stop file they poll, not a signal:
+    ``bench/discovery_peer.py``) as soon as every one of them has seen all ``n``
+    publishers, ``duration`` being only the cap.
     """
     work = Path(tempfile.mkdtemp(prefix="phd_swarm_discovery_"))
+    stop_file = work / "stop"
     env, server_spec = mode_env(mode, domain, work)
     procs: list[subprocess.Popen] = []
     server = None
@@ -113,7 +115,8 @@ def run(mode: str, n: int, duration: float, domain: int,
         for i in range(n):
             # Each peer's stderr goes to a file: a peer that does not exit is asked for
             # its stack (faulthandler on SIGUSR1), which the row then names.
-            proc = subprocess.Popen([sys.executable, str(PEER), str(i), str(duration)],
+            proc = subprocess.Popen([sys.executable, str(PEER), str(i), str(duration),
+                                     str(stop_file)],
                                     env=env, stdout=subprocess.PIPE,
                                     stderr=(work / f"peer{i}.err").open("w"),
                                     text=True, start_new_session=True)
@@ -127,8 +130,7 @@ def run(mode: str, n: int, duration: float, domain: int,
                    and not all(any(r["publishers"] >= n for r in reports)
                                for reports in lines)):
                 time.sleep(0.2)
-            for proc in procs:
-                proc.send_signal(signal.SIGINT)
+            stop_file.touch()
         for proc in procs:
             # wait4 gives this child's own rusage (CPU, peak memory).
             while True:

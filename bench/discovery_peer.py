@@ -1,9 +1,13 @@
 """One participant of the discovery benchmark (bench/discovery.py); not for direct use.
 
-Usage: ``python bench/discovery_peer.py INDEX DURATION_S``. Creates a node with a publisher
-and a subscription on ``/phd_swarm_discovery`` and prints, every 0.5 s, one JSON line
-``{"t": <unix time>, "publishers": <publishers of the topic this process sees>}`` until
-DURATION_S has passed or it is interrupted (SIGINT), then exits 0. The environment
+Usage: ``python bench/discovery_peer.py INDEX DURATION_S [STOP_FILE]``. Creates a node with a
+publisher and a subscription on ``/phd_swarm_discovery`` and prints, every 0.5 s, one JSON
+line ``{"t": <unix time>, "publishers": <publishers of the topic this process sees>}`` until
+DURATION_S has passed or STOP_FILE exists (checked every 0.1 s), then exits 0. The parent
+stops peers early through the file, not a signal: a SIGINT's KeyboardInterrupt can land
+between a lock's acquire and release inside the executor, and the ``shutdown`` that
+follows then waits on that lock for ever (a 9-of-10 exit seen once under load). SIGINT
+still stops a peer started by hand. The environment
 (domain, discovery range, Fast DDS profile, discovery server) is the parent's.
 """
 
@@ -14,6 +18,7 @@ import json
 import signal
 import sys
 import time
+from pathlib import Path
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -22,8 +27,8 @@ from std_msgs.msg import Empty
 TOPIC = "/phd_swarm_discovery"
 
 
-def main(index: int, duration: float) -> int:
-    """Run the peer for ``duration`` seconds, reporting what it sees."""
+def main(index: int, duration: float, stop: Path | None = None) -> int:
+    """Run the peer for ``duration`` seconds or until ``stop`` exists, reporting what it sees."""
     # The parent asks a peer that does not exit for its stack (bench/discovery.py).
     faulthandler.register(signal.SIGUSR1, all_threads=True)
     rclpy.init()
@@ -35,7 +40,7 @@ def main(index: int, duration: float) -> int:
     end = time.time() + duration
     next_report = time.time()
     try:
-        while time.time() < end:
+        while time.time() < end and not (stop is not None and stop.exists()):
             executor.spin_once(timeout_sec=0.1)
             if time.time() >= next_report:
                 print(json.dumps({"t": time.time(),
@@ -51,4 +56,5 @@ def main(index: int, duration: float) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(int(sys.argv[1]), float(sys.argv[2])))
+    sys.exit(main(int(sys.argv[1]), float(sys.argv[2]),
+                  Path(sys.argv[3]) if len(sys.argv) > 3 else None))
