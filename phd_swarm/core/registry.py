@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .outputs import Output
 from .params import ParamSpec
 
 #: The roles a system is made of, in the order of a step (docs/architecture.md).
@@ -105,6 +106,9 @@ class Part:
     provides, requires : frozenset of str
         Capabilities the part gives the others (e.g. ``grid_density``, ``cell``) and those
         it needs from the estimator and the exchange of the same system.
+    outputs : tuple of Output
+        The topics the part's robots publish besides the node's own
+        (:mod:`phd_swarm.core.outputs`).
     extras : dict
         Role-specific hooks (e.g. ``view`` of an exchange, ``central`` of an estimator).
     """
@@ -118,6 +122,7 @@ class Part:
     provides: frozenset[str] = frozenset()
     requires: frozenset[str] = frozenset()
     extras: dict[str, Any] = field(default_factory=dict)
+    outputs: tuple[Output, ...] = ()
 
 
 _PARTS: dict[str, dict[str, Part]] = {role: {} for role in ROLES}
@@ -131,7 +136,8 @@ def _no_setup(scenario: Any, system: Any, **runtime: Any) -> None:
 def register(role: str, name: str, make: Callable[[Any, int], Any], *, description: str,
              setup: Callable[..., Any] = _no_setup,
              options: Iterable[ParamSpec] = (), provides: Iterable[str] = (),
-             requires: Iterable[str] = (), **extras: Any) -> Part:
+             requires: Iterable[str] = (), outputs: Iterable[Output] = (),
+             **extras: Any) -> Part:
     """Register a part under ``name`` for ``role``; returns it.
 
     Raises
@@ -145,7 +151,7 @@ def register(role: str, name: str, make: Callable[[Any, int], Any], *, descripti
     if not name.isidentifier() or name.lower() != name:
         raise RegistryError(f"{role} name must be a lower-case identifier, got {name!r}")
     part = Part(role, name, make, setup, description, tuple(options), frozenset(provides),
-                frozenset(requires), dict(extras))
+                frozenset(requires), dict(extras), tuple(outputs))
     old = _PARTS[role].get(name)
     if old is not None and old.make.__module__ != make.__module__:
         raise RegistryError(f"{role} {name!r} is already registered by {old.make.__module__}")

@@ -15,11 +15,12 @@ topic                                       expected steps
 ``/monitor/estimates``, ``/monitor/density``
 ``/robot_<r>/measurements``, ``pose``       k < K with r alive at k (the world scans it)
 ``/robot_<r>/status`` (``STEP_DONE``),      k < K with r alive at k and at k+1 (a robot the
-``density``, ``cell``, ``goal``,            world still counts alive after step k reported
-``estimates``                               step k)
+``goal``, ``estimates`` and the step        world still counts alive after step k reported
+outputs its parts declare (``density``...)  step k)
 ==========================================  ===================================================
 
-Only topics whose QoS in :mod:`phd_swarm.nodes.topics` is ``STEP`` (one message per step,
+Only topics whose QoS in :mod:`phd_swarm.nodes.topics` (or in the declaration of an
+output, :mod:`phd_swarm.core.outputs`) is ``STEP`` (one message per step,
 kept until acknowledged) are checked; inbox traffic and markers are not step topics. A step
 whose team state is itself missing takes the alive flags of the previous one. The monitor
 is optional (a world, robots and a recorder started by hand make a run without one): when
@@ -45,16 +46,8 @@ from phd_swarm.nodes import topics as T
 ROBOT_INPUTS = ("measurements", "pose")
 
 #: Robot topics written by the robot when it finishes step k, whatever the system: the
-#: others come with the parts' capabilities (:func:`robot_outputs`).
+#: others are the step outputs its parts declare (:func:`robot_outputs`).
 ROBOT_OUTPUTS = ("status", "goal", "estimates")
-
-#: Robot step topics that a capability of the system's parts brings: (role, capability).
-OUTPUT_OF = {"density": ("estimator", "grid_density"), "cell": ("exchange", "cell"),
-             "components": ("estimator", "gaussian_mixture"), "tracks": ("estimator", "tracks"),
-             "reward_set": ("estimator", "reward_set"),
-             "search_map": ("estimator", "search_map"),
-             "sat_state": ("controller", "sat_modes"),
-             "plan": ("controller", "sat_modes")}
 
 #: Topics of an optional node: absent rather than missing when none holds a message.
 OPTIONAL_PREFIX = "/monitor/"
@@ -71,16 +64,15 @@ def step_of(stamp_ns: int, dt: float) -> int:
 
 
 def robot_outputs(system: Any, publish_density: bool = True) -> tuple[str, ...]:
-    """The step topics a robot of ``system`` writes, in the order of the topic table.
+    """The step topics a robot of ``system`` writes, in the order of its topic table.
 
-    :data:`ROBOT_OUTPUTS`, and those of :data:`OUTPUT_OF` whose capability the system's
-    parts provide (``density`` only with ``publish_density``).
+    :data:`ROBOT_OUTPUTS`, and the outputs its parts declare with the ``STEP`` QoS
+    (:func:`phd_swarm.nodes.topics.declared_outputs`; ``density`` only with
+    ``publish_density``).
     """
-    parts = system.parts()
-    have = {k for k, (role, cap) in OUTPUT_OF.items() if cap in parts[role].provides}
-    if not publish_density:
-        have.discard("density")
-    return tuple(k for k in T.ROBOT_TOPICS if k in ROBOT_OUTPUTS or k in have)
+    table = T.robot_topics(T.declared_outputs(system, publish_density))
+    return tuple(k for k, (_, qos, writer, _) in table.items()
+                 if writer == "robot" and qos == "STEP")
 
 
 def monitor_density(system: Any) -> bool:
@@ -99,8 +91,7 @@ def step_topics(robots: int, outputs: Iterable[str] = ("density", "cell", *ROBOT
            if qos == "STEP" or name == T.CLOCK]
     if not monitor_density:
         out.remove(T.MONITOR_DENSITY)
-    outputs = set(outputs)
-    kinds = [k for k in T.ROBOT_TOPICS if k in ROBOT_INPUTS or k in outputs]
+    kinds = [k for k in T.ROBOT_TOPICS if k in ROBOT_INPUTS] + list(dict.fromkeys(outputs))
     out += [T.robot_topic(r, k) for r in range(robots) for k in kinds]
     return out
 

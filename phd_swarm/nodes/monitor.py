@@ -15,7 +15,7 @@ during step k is not waited for), it
    ``estimates`` with the sum of their expected counts
    (:func:`phd_swarm.core.scoring.score_estimates`), and computes the estimator part's own
    figures (its ``figures`` hook, e.g. Sung & Tokekar's tracks and Mahalanobis distances)
-   from the robots' ``components`` and ``tracks`` (:mod:`phd_swarm.nodes.gm_convert`);
+   from the robots' ``components`` and ``tracks`` (:mod:`phd_swarm.nodes.faces.gaussian_mixture`);
 3. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` (grid
    only) and ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
@@ -41,10 +41,11 @@ from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
-from phd_swarm.nodes import completeness, convert, gm_convert
+from phd_swarm.nodes import completeness, convert
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.faces import gaussian_mixture
+from phd_swarm.nodes.faces.meet_merge import reward_points
 from phd_swarm.nodes.markers import team_markers_cdr
-from phd_swarm.nodes.meet_merge_wire import reward_points
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import (
@@ -410,15 +411,15 @@ class MonitorNode(Node):
 GRID_MARKERS_EVERY = 100
 
 
-def estimator_view(got: dict[str, Any]) -> gm_convert.EstimatorView:
+def estimator_view(got: dict[str, Any]) -> gaussian_mixture.EstimatorView:
     """A robot's step outputs as the view a ``figures`` hook reads.
 
     ``components`` and, if the robot publishes them, ``tracks`` and ``reward_set``;
     InvalidMessage if one is bad.
     """
-    return gm_convert.EstimatorView(
-        gm_convert.mixture_from_ros(got["components"], MAX_COMPONENTS),
-        gm_convert.tracks_from_ros(got["tracks"], MAX_COMPONENTS) if "tracks" in got
+    return gaussian_mixture.EstimatorView(
+        gaussian_mixture.mixture_from_ros(got["components"], MAX_COMPONENTS),
+        gaussian_mixture.tracks_from_ros(got["tracks"], MAX_COMPONENTS) if "tracks" in got
         else None,
         reward_points(got["reward_set"]) if "reward_set" in got else None,
         np.array(got["reward_set"].met_ids, dtype=np.int64) if "reward_set" in got

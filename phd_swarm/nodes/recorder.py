@@ -6,7 +6,8 @@ clock read and an append to the current chunk (DESIGN.md "MCAP logs").
 
 Topics
     With ``params_file`` set, the recorder loads that run config and subscribes at once to
-    every topic of :func:`phd_swarm.nodes.topics.run_topics` for the scenario's team, with
+    every topic of :func:`phd_swarm.nodes.topics.run_topics` for the scenario's team (the
+    outputs its system's parts declare, so no reader waits on a topic nobody writes), with
     the table's reader QoS (keep-all for the step topics, so the reader never drops a
     message it has not handed over; others deepened to :data:`MIN_TABLE_DEPTH`); the world
     and the robots count it among their ``observers`` before step 0. With ``wait_for_world``
@@ -149,14 +150,19 @@ def starts_with_stamp(ros_type: str) -> bool:
     return False
 
 
-def table_spec(topic: str) -> tuple[str, str] | None:
-    """(type, QoS name) of ``topic`` in :mod:`phd_swarm.nodes.topics`, or None."""
+def table_spec(topic: str, robot_table: dict[str, tuple[str, ...]] = T.ROBOT_TOPICS
+               ) -> tuple[str, str] | None:
+    """(type, QoS name) of ``topic`` in :mod:`phd_swarm.nodes.topics`, or None.
+
+    ``robot_table``: a robot's topics by relative name (:func:`~phd_swarm.nodes.topics.
+    robot_topics` of the run's declared outputs; by default those of every robot).
+    """
     if topic in T.TEAM_TOPICS:
         typ, qos_name, *_ = T.TEAM_TOPICS[topic]
         return typ, qos_name
     match = _ROBOT_TOPIC.match(topic)
-    if match and match.group(1) in T.ROBOT_TOPICS:
-        typ, qos_name, *_ = T.ROBOT_TOPICS[match.group(1)]
+    if match and match.group(1) in robot_table:
+        typ, qos_name, *_ = robot_table[match.group(1)]
         return typ, qos_name
     return None
 
@@ -255,6 +261,8 @@ class Recorder(Node):
         self._dt_ns = 0.0
         self._robots = 0
         self._step_topics: frozenset[str] = frozenset()
+        #: A robot's topics by relative name: its system's with a config, else the common.
+        self._robot_table: dict[str, tuple[str, ...]] = dict(T.ROBOT_TOPICS)
         self._steps: dict[str, set[int]] = defaultdict(set)
         self._team: dict[int, np.ndarray] = {}
         self.report: completeness.Completeness | None = None
@@ -302,8 +310,10 @@ class Recorder(Node):
         self._dt_ns = s.dt * 1e9
         self._robots = s.robots
         self._step_topics = frozenset(completeness.run_step_topics(rc))
+        outputs = T.declared_outputs(s.system, bool(rc.param("robot", "publish_density")))
+        self._robot_table = T.robot_topics(outputs)
         wait = self.params["wait_for_world"]
-        for spec in T.run_topics(range(s.robots)):
+        for spec in T.run_topics(range(s.robots), outputs):
             if wait and spec.name == T.WORLD_TRUTH:
                 self._truth_spec = spec
             elif self._inboxes or not _INBOX_TOPIC.match(spec.name):
@@ -436,7 +446,7 @@ class Recorder(Node):
                 self.get_logger().warning(f"{topic} has several types {types}; recording "
                                           f"{types[0]}")
             offers = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
-            spec = table_spec(topic)
+            spec = table_spec(topic, self._robot_table)
             if spec is not None and spec[0] == types[0] \
                     and accepts(subscription_qos(spec[1]), offers):
                 qos = reader_qos(spec[1])

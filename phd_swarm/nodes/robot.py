@@ -7,8 +7,8 @@ for Dames' and Chen's systems the exchange is
 Chen's cumulative state, and the controllers are those of :mod:`phd_swarm.core.controllers`,
 Dames eq. 8, Chen eq. 2-3 and 12-14; for Sung & Tokekar's single robot there is no exchange,
 ``none``, and every step is done as soon as the scan is in). What it publishes at the end of
-a step follows from what the parts provide (:mod:`phd_swarm.nodes.robot_outputs`: a grid
-window and a cell, or Gaussian components, tracks and markers). Per step k:
+a step is what the parts declare (:mod:`phd_swarm.nodes.robot_outputs`: a grid window and
+a cell, or Gaussian components, tracks and markers...). Per step k:
 
 1. the world's measurement set Z_r^k arrives on ``measurements`` (with the sensor position
    q^k): the step starts, and the protocol's messages go to the contacts' inboxes
@@ -65,6 +65,7 @@ import sys
 import threading
 import time
 from collections import defaultdict, deque
+from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import Point, PoseStamped
@@ -73,10 +74,8 @@ from rclpy.node import Node
 
 from phd_swarm.config.node_params import ROBOT, SHARED
 from phd_swarm.core.agent import Team
-from phd_swarm.core.exchange.base import Envelope
+from phd_swarm.core.exchange.base import Envelope, ProtocolError
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
-from phd_swarm.core.exchange.voronoi_phd.messages import Message
-from phd_swarm.core.exchange.voronoi_phd.participant import ProtocolError
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes import topics as T
@@ -267,16 +266,16 @@ class RobotNode(Node):
     def _unmatched(self) -> str:
         """What has not matched yet, in words; "" once all have their readers.
 
-        The status needs the world and the observers, the density window the observers, and
-        each contact's inbox its robot.
+        The status needs the world and the observers, the observed outputs (the density
+        window of a grid PHD) the observers, and each contact's inbox its robot.
         """
         need = self.params["observers"]
         missing = []
         status = self.status_pub.get_subscription_count()
         if status < 1 + need:
             missing.append(f"status: {status} of {1 + need} readers (world and observers)")
-        if not self.outputs.matched(need):
-            missing.append(f"density: fewer than {need} observers")
+        for topic in self.outputs.unmatched(need):
+            missing.append(f"{topic}: fewer than {need} observers")
         peers = sorted(dst for dst, pub in self._peer_pubs.items()
                        if pub.get_subscription_count() < 1)
         if peers:
@@ -288,8 +287,7 @@ class RobotNode(Node):
         """The world's measurement set for this robot, taken as CDR (a raw subscription)."""
         self._alive_at = time.monotonic()
         try:
-            scan = convert.decode(MeasurementSet, data, self.grid,
-                                  self.params["max_measurements"])
+            scan = convert.decode_scan(data, self.params["max_measurements"])
             if scan.robot_id != self.robot_id:
                 raise convert.InvalidMessage(f"measurement set of robot {scan.robot_id} on "
                                              f"robot {self.robot_id}'s topic")
@@ -371,7 +369,7 @@ class RobotNode(Node):
         self._send(self.agent.advance())
         self._after_progress()
 
-    def _check_welcome(self, msg: Message) -> None:
+    def _check_welcome(self, msg: Any) -> None:
         src = self.wire.sender(msg)
         if src == self.robot_id:
             raise convert.InvalidMessage(f"sender claims this robot's own id {src} (duplicate "

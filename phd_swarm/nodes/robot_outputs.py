@@ -1,36 +1,17 @@
-"""What a robot node publishes when it finishes a step, by what its system's parts provide.
+"""What a robot node publishes when it finishes a step: its own topics and its parts' outputs.
 
-Every robot writes ``goal`` and ``estimates`` (and the node its ``status``, last); the
-other outputs come with capabilities (:func:`phd_swarm.nodes.completeness.robot_outputs`):
+Every robot writes ``goal`` and ``estimates`` (and the node its ``status``, last). The rest
+is what the system's parts declare (:mod:`phd_swarm.core.outputs`): each declared
+:class:`~phd_swarm.core.outputs.Output` is published with its QoS under the robot's
+namespace, built by the face it names (:mod:`phd_swarm.nodes.face`), in the declared order
+(estimator, exchange, controller). The node parameters ``publish_density`` and
+``publish_markers`` switch off the ``density`` and ``markers`` outputs where a system has
+them. docs/topics.md lists every declared output with its part.
 
-===============  ==========================  ============================================
-topic            type                        when the system's ...
-===============  ==========================  ============================================
-``density``      ``DensityGrid``             estimator provides ``grid_density`` (its
-                                             owned bins, Dames eq. 2; ``publish_density``)
-``cell``         ``CellPolygon``             exchange provides ``cell`` (Dames Alg. 1)
-``components``   ``GaussianMixture``         estimator provides ``gaussian_mixture``
-                                             (Vo & Ma; Sung & Tokekar Layer 1)
-``tracks``       ``TrackSet``                estimator provides ``tracks`` (Sung & Tokekar
-                                             Layers 2-3)
-``markers``      ``MarkerArray``             estimator provides ``gaussian_mixture``
-                                             (ellipses, tracks, FoV, path; not a step topic),
-                                             or the controller ``sat_modes`` (the sensing
-                                             square by mode, the plan, the estimates)
-``reward_set``   ``RewardSet``               estimator provides ``reward_set`` (Shirsat &
-                                             Berman M_k, with the robots met at the step)
-``search_map``   ``DensityGrid``             estimator provides ``search_map`` (Papaioannou
-                                             et al.'s search values p_v, one per node)
-``sat_state``    ``SatState``                controller provides ``sat_modes``: tracking
-                                             or searching next, the predicted targets, the
-                                             joint plan's agents (no map: ``search_map``)
-``plan``         ``nav_msgs/Path``           controller provides ``sat_modes``: the next
-                                             goal, then the search plan's nodes
-===============  ==========================  ============================================
-
-The estimates are the estimator's own (``estimates()``), or for a grid PHD that the exchange
-runs, those of the robot's owned bins. :meth:`RobotOutputs.status_fields` gives what the
-status reports of the step (bins owned, PHD mass, dead peers).
+The estimates are the estimator's own (``estimates()``), or, for an estimator whose PHD
+the exchange keeps on the robot's owned bins (capability ``grid_density``), those of the
+owned bins. :meth:`RobotOutputs.status_fields` gives what the status reports of the step
+(bins owned, PHD mass, dead peers).
 """
 
 from __future__ import annotations
@@ -38,33 +19,15 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import Point
-from nav_msgs.msg import Path
-from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.core.agent import Agent
 from phd_swarm.core.controllers.base import Decision
-from phd_swarm.core.exchange.sat_share import SatMsg
-from phd_swarm.nodes import convert, gm_convert
-from phd_swarm.nodes.completeness import robot_outputs
-from phd_swarm.nodes.meet_merge_wire import reward_set
+from phd_swarm.core.outputs import Output
+from phd_swarm.nodes import convert
+from phd_swarm.nodes.face import Face, Step, load_face
 from phd_swarm.nodes.qos import publisher_qos
-from phd_swarm.nodes.sat_markers import sat_markers
-from phd_swarm.nodes.sat_share_wire import sat_state
-from phd_swarm_msgs.msg import (
-    CellPolygon,
-    DensityGrid,
-    GaussianMixture,
-    RewardSet,
-    SatState,
-    TargetSet,
-    TrackSet,
-)
-
-#: ROS type of each step output a capability brings (goal and status are the node's).
-TYPES = {"density": DensityGrid, "cell": CellPolygon, "estimates": TargetSet,
-         "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet,
-         "search_map": DensityGrid, "sat_state": SatState, "plan": Path}
+from phd_swarm.nodes.topics import declared_outputs
+from phd_swarm_msgs.msg import TargetSet
 
 
 class RobotOutputs:
@@ -76,10 +39,8 @@ class RobotOutputs:
         The robot node (publishers are made on it, relative to its namespace).
     agent : Agent
         The robot's agent.
-    publish_density : bool
-        Publish the grid PHD window (``density``) when the estimator has one.
-    publish_markers : bool
-        Publish ``markers`` when the estimator is a Gaussian mixture.
+    publish_density, publish_markers : bool
+        Publish the ``density`` / ``markers`` outputs where the system declares them.
     """
 
     def __init__(self, node: Any, agent: Agent, publish_density: bool,
@@ -88,94 +49,36 @@ class RobotOutputs:
         self.robot_id = agent.robot_id
         scenario = agent.team.scenario
         self.dt = scenario.dt
-        self.grid = scenario.grid
         self.frame_id = node.params["world_frame_id"]
-        parts = agent.team.parts
-        self.kinds = robot_outputs(scenario.system, publish_density)
-        self.grid_estimator = "grid_density" in parts["estimator"].provides
-        self.pubs = {k: node.create_publisher(TYPES[k], k, publisher_qos("STEP"))
-                     for k in self.kinds if k in TYPES}
-        self.markers = None
-        self.sat_markers = publish_markers and "sat_state" in self.kinds
-        if self.sat_markers:
-            self.markers_pub = node.create_publisher(MarkerArray, "markers",
-                                                     publisher_qos("OBSERVATION"))
-        if publish_markers and "components" in self.kinds:
-            from phd_swarm.nodes.robot_markers import RobotMarkers
+        self.grid_estimator = "grid_density" in agent.team.parts["estimator"].provides
+        self.estimates_pub = node.create_publisher(TargetSet, "estimates",
+                                                   publisher_qos("STEP"))
+        self.outputs: list[tuple[Output, Face, Any, dict[str, Any]]] = []
+        for out in declared_outputs(scenario.system, publish_density, publish_markers):
+            face = load_face(out)
+            pub = node.create_publisher(face.msg_type, out.topic, publisher_qos(out.qos))
+            self.outputs.append((out, face, pub, {}))
+        self.kinds = tuple(o.topic for o, *_ in self.outputs)
 
-            self.markers = RobotMarkers(self.robot_id, self.frame_id,
-                                        float(scenario.models.detection.radius))
-            self.markers_pub = node.create_publisher(MarkerArray, "markers",
-                                                     publisher_qos("OBSERVATION"))
-
-    def matched(self, observers: int) -> bool:
-        """Whether ``observers`` subscribers matched the density window (if published)."""
-        pub = self.pubs.get("density")
-        return pub is None or pub.get_subscription_count() >= observers
+    def unmatched(self, observers: int) -> list[str]:
+        """The observed outputs (``Output.observed``) with fewer than ``observers`` readers."""
+        return [out.topic for out, _, pub, _ in self.outputs
+                if out.observed and pub.get_subscription_count() < observers]
 
     def publish(self, k: int, decision: Decision) -> None:
         """Publish step ``k``'s outputs (all but the goal and the status)."""
         ex, est = self.agent.exchange, self.agent.estimator
-        h = convert.header(k, self.dt, self.frame_id)
-        if "density" in self.pubs:
-            self.pubs["density"].publish(convert.density_grid(
-                self.robot_id, k, self.grid, ex.bins, ex.weights, self.dt, self.frame_id))
-        if "cell" in self.pubs:
-            position = self.agent.position
-            self.pubs["cell"].publish(CellPolygon(
-                header=h, robot_id=self.robot_id, step=k,
-                generator=Point(x=float(position[0]), y=float(position[1])),
-                power_weight=float(decision.power_weight), vertices=convert.points(ex.cell),
-                neighbour_ids=convert.u32(ex.neighbours)))
         if self.grid_estimator:
             points, expected = est.estimates(ex.bins, ex.weights), est.expected_count(ex.weights)
         else:
             points, expected = est.estimates(), est.expected_count()
         points = np.asarray(points, dtype=float).reshape(-1, 2)
-        self.pubs["estimates"].publish(convert.target_set(
+        self.estimates_pub.publish(convert.target_set(
             self.robot_id, k, np.arange(len(points)), points, expected, self.dt,
             self.frame_id))
-        mixture = tracks = None
-        if "components" in self.pubs:
-            mix = est.mixture
-            mixture = gm_convert.MixtureArrays(mix.weights, mix.means, mix.covs)
-            self.pubs["components"].publish(gm_convert.gaussian_mixture(
-                self.robot_id, k, mix.weights, mix.means, mix.covs, self.dt, self.frame_id))
-        if "tracks" in self.pubs:
-            tracks = track_arrays(est)
-            self.pubs["tracks"].publish(gm_convert.track_set(self.robot_id, k, tracks,
-                                                             self.dt, self.frame_id))
-        if "reward_set" in self.pubs:
-            self.pubs["reward_set"].publish(reward_set(
-                self.robot_id, k, est.reward_set(), self.dt, self.frame_id,
-                getattr(ex, "met", ())))
-        if "search_map" in self.pubs:
-            grid = est.setup.grid.grid
-            self.pubs["search_map"].publish(convert.density_grid(
-                self.robot_id, k, grid, np.arange(grid.size), est.search, self.dt,
-                self.frame_id))
-        if "sat_state" in self.pubs:
-            ctl = self.agent.controller
-            self.pubs["sat_state"].publish(sat_state(SatMsg(
-                self.robot_id, k, np.asarray(self.agent.position, dtype=float),
-                bool(ctl.tracking), est.predicted_states()[:, :2], np.empty(0),
-                tuple(ctl.plan_members)), self.dt, self.frame_id))
-        if "plan" in self.pubs:
-            self.pubs["plan"].publish(Path(header=h, poses=[
-                convert.pose_stamped(q, k, self.dt, self.frame_id)
-                for q in self.agent.controller.planned_path()]))
-        if self.sat_markers:
-            ctl = self.agent.controller
-            mode = ("yield" if ctl.yielding else "track") if ctl.tracking or ctl.yielding \
-                else "search"
-            self.markers_pub.publish(sat_markers(
-                convert.stamp(k, self.dt), self.frame_id, self.robot_id, self.agent.position,
-                float(est.setup.sensor.side), mode, ctl.planned_path(), points))
-        if self.markers is not None:
-            self.markers_pub.publish(self.markers.build(
-                convert.stamp(k, self.dt), self.agent.position, mixture, tracks,
-                self.agent.controller.planned_path(),
-                est.reward_set() if "reward_set" in self.pubs else None))
+        step = Step(self.agent, k, decision, points, self.dt, self.frame_id)
+        for _, face, pub, memo in self.outputs:
+            pub.publish(face.build(step, memo))
 
     def status_fields(self) -> dict[str, Any]:
         """What the status of the step reports of the estimate: bins, mass, dead peers."""
@@ -185,11 +88,3 @@ class RobotOutputs:
                     "dead_ids": convert.u32(sorted(ex.dead))}
         return {"owned_bins": 0, "mass": float(est.expected_count()),
                 "dead_ids": convert.u32(sorted(getattr(ex, "dead", ())))}
-
-
-def track_arrays(estimator: Any) -> gm_convert.TrackArrays:
-    """An estimator's targets with their tracks (``targets()``, ``confirmed_mask()``)."""
-    positions, covs, weights, ids = estimator.targets()
-    life = np.array([estimator.tracks.tracks[i].life for i in ids.tolist()], dtype=np.int64)
-    return gm_convert.TrackArrays(ids, life, estimator.confirmed_mask(), weights, positions,
-                                  covs)

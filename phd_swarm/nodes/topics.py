@@ -15,13 +15,21 @@ the writer side with a short history, so that a message written by a publisher c
 moment ago (a new contact) still reaches the inbox
 once the two match; readers keep a deep queue so a burst is never overwritten.
 
+A robot's other topics are those its system's parts declare (:mod:`phd_swarm.core.outputs`:
+:func:`declared_outputs`, :func:`robot_topics`), so a run subscribes to no topic its robots
+do not write.
+
 The table is rclpy-free on purpose (QoS as names of :mod:`phd_swarm.nodes.qos` profiles) so
 that tools and docs can read it without ROS.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
+
+from phd_swarm.core.outputs import Output, system_outputs
 
 #: Namespace prefix of robot ``i``: ``/robot_<i>``.
 ROBOT_PREFIX = "robot_"
@@ -73,34 +81,40 @@ def robot_topic(robot_id: int, relative: str) -> str:
     return f"{robot_namespace(robot_id)}/{relative}"
 
 
-#: Topics in every robot's namespace, by relative name: (type, QoS, writer, rate).
+#: Topics in every robot's namespace whatever the system, by relative name: (type, QoS,
+#: writer, rate). The rest of a robot's topics are its system's declared outputs
+#: (:func:`robot_topics`).
 ROBOT_TOPICS = {
     "measurements": ("phd_swarm_msgs/msg/MeasurementSet", "STEP", "world", "once per step"),
     "pose": ("geometry_msgs/msg/PoseStamped", "STEP", "world", "once per step"),
     "goal": ("geometry_msgs/msg/PoseStamped", "STEP", "robot", "once per step"),
     "status": ("phd_swarm_msgs/msg/RobotStatus", "STEP", "robot", "once per step"),
-    "cell": ("phd_swarm_msgs/msg/CellPolygon", "STEP", "robot",
-             "once per step (exchanges with cells)"),
-    "density": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot",
-                "once per step (grid estimators)"),
     "estimates": ("phd_swarm_msgs/msg/TargetSet", "STEP", "robot", "once per step"),
-    "components": ("phd_swarm_msgs/msg/GaussianMixture", "STEP", "robot",
-                   "once per step (Gaussian-mixture estimators)"),
-    "tracks": ("phd_swarm_msgs/msg/TrackSet", "STEP", "robot",
-               "once per step (estimators with tracks)"),
-    "markers": ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "robot",
-                "once per step (Gaussian-mixture estimators, search-and-track agents)"),
-    "reward_set": ("phd_swarm_msgs/msg/RewardSet", "STEP", "robot",
-                   "once per step (estimators with reward sets)"),
-    "search_map": ("phd_swarm_msgs/msg/DensityGrid", "STEP", "robot",
-                   "once per step (estimators with a search map)"),
-    "sat_state": ("phd_swarm_msgs/msg/SatState", "STEP", "robot",
-                  "once per step (search-and-track controllers)"),
-    "plan": ("nav_msgs/msg/Path", "STEP", "robot",
-             "once per step (search-and-track controllers)"),
     "inbox": ("phd_swarm_msgs/msg/InboxMessage", "INBOX", "peers",
               "per tick with protocol traffic, one per contact"),
 }
+
+def declared_outputs(system: Any, publish_density: bool = True,
+                     publish_markers: bool = True) -> tuple[Output, ...]:
+    """The outputs the parts of ``system`` declare, without those switched off."""
+    off = {"density": not publish_density, "markers": not publish_markers}
+    return system_outputs(system.parts(), [t for t, o in off.items() if o])
+
+
+def output_rate(output: Output) -> str:
+    """How often an output is written, for the topic table."""
+    return "once per step" if output.per_step else "once per step, for viewers"
+
+
+def robot_topics(outputs: Iterable[Output] = ()) -> dict[str, tuple[str, str, str, str]]:
+    """A robot's topics: :data:`ROBOT_TOPICS` and ``outputs`` (before the inbox)."""
+    own = dict(ROBOT_TOPICS)
+    inbox = own.pop("inbox")
+    for o in outputs:
+        own[o.topic] = (o.type, o.qos, "robot", output_rate(o))
+    own["inbox"] = inbox
+    return own
+
 
 #: Team-wide topics: (type, QoS, writer, rate).
 TEAM_TOPICS = {
@@ -120,9 +134,11 @@ TEAM_TOPICS = {
 }
 
 
-def run_topics(robot_ids: list[int] | range) -> list[TopicSpec]:
-    """Every topic of a run with robots ``robot_ids``, team topics first."""
+def run_topics(robot_ids: list[int] | range, outputs: Iterable[Output] = ()
+               ) -> list[TopicSpec]:
+    """Every topic of a run with robots ``robot_ids`` declaring ``outputs``, team first."""
     out = [TopicSpec(name, *spec) for name, spec in TEAM_TOPICS.items()]
+    table = robot_topics(outputs)
     for rid in robot_ids:
-        out.extend(TopicSpec(robot_topic(rid, rel), *spec) for rel, spec in ROBOT_TOPICS.items())
+        out.extend(TopicSpec(robot_topic(rid, rel), *spec) for rel, spec in table.items())
     return out

@@ -54,7 +54,7 @@ import numpy as np
 
 from phd_swarm.core.scoring import StepScore, score_estimates, score_step, series_summary
 from phd_swarm.logs.mcap_log import LogError
-from phd_swarm.nodes.gm_convert import EstimatorView
+from phd_swarm.nodes.faces.gaussian_mixture import EstimatorView
 from phd_swarm.nodes.monitor import figure_means
 from phd_swarm.tools.log_check import WARNING, check_log
 from phd_swarm.tools.plots import (

@@ -66,37 +66,11 @@ DESCRIPTIONS: dict[str, str] = {
                                     "weight and counters: the world's lockstep hand-shake; "
                                     "WORKING once per tick_period while a step lasts "
                                     "or the robot waits for the next (liveness).",
-    ROBOT_PATTERN.format("cell"): "The robot's own cell (Voronoi or power diagram clipped to "
-                                  "E) and neighbour ids, for observers.",
-    ROBOT_PATTERN.format("density"): "The robot's PHD over a window of the grid (parameter "
-                                     "`publish_density`); the monitor assembles the team "
-                                     "PHD from them.",
     ROBOT_PATTERN.format("estimates"): "Targets extracted from the robot's local PHD (its "
                                        "owned bins, or its own Gaussian mixture).",
-    ROBOT_PATTERN.format("components"): "The robot's GM-PHD components: weights, means, "
-                                        "covariances (float64, exact); the monitor and "
-                                        "evaluate.sh compute Sung & Tokekar's figures from "
-                                        "them and the tracks.",
-    ROBOT_PATTERN.format("tracks"): "The robot's targets with their track ids, life "
-                                    "lengths, confirmed flags, weights and covariances "
-                                    "(Sung & Tokekar Sec. V-E, V-F).",
-    ROBOT_PATTERN.format("reward_set"): "The robot's reward set M_k (targets extracted so "
-                                        "far, merged with those of the robots met) and the "
-                                        "robots met at step k (Shirsat & Berman eq. 6).",
-    ROBOT_PATTERN.format("search_map"): "The agent's search values p_v, one per node of its "
-                                        "search map (Papaioannou et al. eq. 10), 0 = never "
-                                        "searched, 1 = searched now.",
-    ROBOT_PATTERN.format("sat_state"): "The agent's own state: tracking or searching next, "
-                                       "its predicted targets and joint-plan agents "
-                                       "(Papaioannou et al. Sec. V; no map).",
-    ROBOT_PATTERN.format("plan"): "The agent's next goal, then (searching) the nodes of its "
-                                  "search plan in order (Papaioannou et al. Sec. V-B).",
     ROBOT_PATTERN.format("inbox"): "Protocol messages from one contact, packed per tick: "
                                    "kinds, offsets and the CDR bytes of each (see Inboxes "
                                    "above).",
-    ROBOT_PATTERN.format("markers"): "Covariance ellipses, targets and confirmed track ids, "
-                                     "field of view and planned path, for RViz2 / Foxglove "
-                                     "(`robot_markers.RobotMarkers`).",
 }
 
 #: Meaning and unit of every flattened scenario key (``scenario.<key>``), in display order.
@@ -385,15 +359,36 @@ def _missing(what: str, keys: set[str], table: str) -> None:
 
 
 # ----------------------------------------------------------------------------- topics
-def documented_topics() -> list[tuple[str, tuple[str, str, str, str]]]:
-    """Every topic as shown in docs/topics.md, with (type, QoS name, writer, rate).
+def _builtin_parts() -> list[tuple[str, str, Any]]:
+    """(role, name, part) of every built-in part (a plugin loaded here is not documented)."""
+    return [(role, name, part) for role in registry.ROLES for name in registry.names(role)
+            if (part := registry.lookup(role, name)).make.__module__.startswith("phd_swarm.")]
+
+
+def documented_topics() -> list[tuple[str, tuple[str, str, str, str], str]]:
+    """Every topic as shown in docs/topics.md: name, (type, QoS name, writer, rate), text.
 
     Team topics first, by their absolute names, then the robot topics as
-    ``/robot_<id>/<relative>``.
+    ``/robot_<id>/<relative>``: those of every robot, then the outputs the registered parts
+    declare (:mod:`phd_swarm.core.outputs`), one row per declaration with the parts that
+    make it.
     """
-    team = list(topics.TEAM_TOPICS.items())
-    robot = [(ROBOT_PATTERN.format(rel), spec) for rel, spec in topics.ROBOT_TOPICS.items()]
-    return team + robot
+    team = [(name, spec, DESCRIPTIONS.get(name, "")) for name, spec in topics.TEAM_TOPICS.items()]
+    own = [(ROBOT_PATTERN.format(rel), spec, DESCRIPTIONS.get(ROBOT_PATTERN.format(rel), ""))
+           for rel, spec in topics.ROBOT_TOPICS.items()]
+    by: dict[Any, dict[str, list[str]]] = {}
+    for role, name, part in _builtin_parts():
+        for out in part.outputs:
+            by.setdefault(out, {}).setdefault(role, []).append(f"`{name}`")
+
+    def makers(roles: dict[str, list[str]]) -> str:
+        return "; ".join(f"{role}{'s' if len(n) > 1 else ''} {', '.join(n)}"
+                         for role, n in roles.items())
+
+    declared = [(ROBOT_PATTERN.format(o.topic),
+                 (o.type, o.qos, "robot", f"{topics.output_rate(o)} ({makers(roles)})"),
+                 o.description) for o, roles in sorted(by.items(), key=lambda i: i[0].topic)]
+    return team + own[:-1] + declared + own[-1:]
 
 
 def _depths(writer: QoSProfile, reader: QoSProfile) -> str:
@@ -422,16 +417,16 @@ def _policy(p: QoSProfile) -> str:
 def render_topics() -> str:
     """The text of docs/topics.md."""
     shown = documented_topics()
-    _missing("topics", {n for n, _ in shown} - set(DESCRIPTIONS), "DESCRIPTIONS")
+    _missing("topics", {n for n, _, text in shown if not text}, "DESCRIPTIONS")
     _missing("inbox kinds", set(topics.INBOX) - set(INBOX_KINDS), "INBOX_KINDS")
     header = ("topic", "type", "QoS", "writer", "rate", "description")
 
-    def rows(names: list[tuple[str, tuple[str, str, str, str]]]) -> list[list[str]]:
-        return [[f"`{name}`", f"`{typ}`", f"`{q}`: {qos_summary(q)}", writer, rate,
-                 DESCRIPTIONS[name]] for name, (typ, q, writer, rate) in names]
+    def rows(names: list[tuple[str, tuple[str, str, str, str], str]]) -> list[list[str]]:
+        return [[f"`{name}`", f"`{typ}`", f"`{q}`: {qos_summary(q)}", writer, rate, text]
+                for name, (typ, q, writer, rate), text in names]
 
     n_team = len(topics.TEAM_TOPICS)
-    used = {q for _, (_, q, _, _) in shown}
+    used = {q for _, (_, q, _, _), _ in shown}
     qos_rows = []
     for name, (writer, reader) in qos.BY_NAME.items():
         qos_rows.append([f"`{name}`", _policy(writer), writer.depth, _policy(reader),
@@ -439,7 +434,8 @@ def render_topics() -> str:
     qos_table = _table(("name", "writer", "writer depth", "reader", "reader depth",
                         "used by a topic"), qos_rows)
     return TOPICS_TEMPLATE.format(
-        generated=_GENERATED.format(sources="phd_swarm/nodes/topics.py and qos.py"),
+        generated=_GENERATED.format(
+            sources="phd_swarm/nodes/topics.py, qos.py and the parts' declared outputs"),
         team_table=_table(header, rows(shown[:n_team])),
         robot_table=_table(header, rows(shown[n_team:])),
         inbox_table=_table(("kind", "type", "carries"),
@@ -508,8 +504,7 @@ def render_parameters() -> str:
     scenario_table = _table(("parameter", *defaults, "meaning"), rows)
     # The package's own parts: a plugin a test or sweep has loaded into this process is
     # not part of the docs.
-    parts = [part for role in registry.ROLES for name in registry.names(role)
-             if (part := registry.lookup(role, name)).make.__module__.startswith("phd_swarm.")]
+    parts = [part for _, _, part in _builtin_parts()]
     parts_table = _table(("role", "name", "options", "provides", "requires", "description"),
                          [[p.role, f"`{p.name}`",
                            ", ".join(f"`{o.name}`" for o in p.options) or "-",

@@ -19,8 +19,8 @@ streamed, not kept, so memory stays at a few steps whatever the run's length:
 - any other estimator (Sung & Tokekar's GM-PHD): :meth:`RunLog.team_estimates` yields per
   step the robots' own estimates (``/robot_<i>/estimates``) and, for the estimator's figures,
   their components and tracks (``components``, ``tracks``), one
-  :class:`~phd_swarm.nodes.gm_convert.EstimatorView` per robot, checked as the monitor
-  checks them (:mod:`phd_swarm.nodes.gm_convert`).
+  :class:`~phd_swarm.nodes.faces.gaussian_mixture.EstimatorView` per robot, checked as the monitor
+  checks them (:mod:`phd_swarm.nodes.faces.gaussian_mixture`).
 
 Messages are deserialised with rclpy's C type support (the installed message classes), not
 decoded in Python.
@@ -46,9 +46,10 @@ from rclpy.serialization import deserialize_message as _rclpy_deserialize
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
 from phd_swarm.core.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
-from phd_swarm.nodes import convert, gm_convert
+from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import monitor_density, reporters, robot_outputs
+from phd_swarm.nodes.faces import gaussian_mixture
 from phd_swarm.nodes.monitor import MAX_COMPONENTS
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm_msgs.msg import (
@@ -123,7 +124,7 @@ class TeamEstimate(NamedTuple):
     step: int
     estimates: np.ndarray
     expected: float
-    views: list[gm_convert.EstimatorView]
+    views: list[gaussian_mixture.EstimatorView]
     reporters: tuple[int, ...]
 
 
@@ -248,7 +249,7 @@ class RunLog:
         LogError
             Naming the topic and step, if a message fails the monitor's checks (non-finite
             positions or expected count, mixtures or tracks that
-            :mod:`~phd_swarm.nodes.gm_convert` refuses).
+            :mod:`~phd_swarm.nodes.faces.gaussian_mixture` refuses).
         """
         wanted = None if steps is None else set(steps)
         kinds = self.step_inputs
@@ -284,8 +285,8 @@ class RunLog:
                         convert.finite(msg.expected_cardinality, "expected_cardinality",
                                        low=0.0))
             if kind == "components":
-                return gm_convert.mixture_from_ros(msg, MAX_COMPONENTS)
-            return gm_convert.tracks_from_ros(msg, MAX_COMPONENTS)
+                return gaussian_mixture.mixture_from_ros(msg, MAX_COMPONENTS)
+            return gaussian_mixture.tracks_from_ros(msg, MAX_COMPONENTS)
         except convert.InvalidMessage as exc:
             raise LogError(f"{self.path}: {topic} at step {int(msg.step)}: {exc}") from None
 
@@ -334,7 +335,7 @@ def _team_estimate(k: int, robots: dict[int, dict[str, Any]], kinds: tuple[str, 
         positions, count = robots[rid]["estimates"]
         points.append(positions)
         expected += count
-    views = ([gm_convert.EstimatorView(robots[r]["components"], robots[r]["tracks"])
+    views = ([gaussian_mixture.EstimatorView(robots[r]["components"], robots[r]["tracks"])
               for r in ids] if {"components", "tracks"} <= set(kinds) else [])
     estimates = np.concatenate(points) if points else np.empty((0, 2))
     return TeamEstimate(k, estimates, expected, views, ids)

@@ -94,9 +94,11 @@ def test_a_robot_writes_the_outputs_its_parts_provide():
     from phd_swarm.sim.presets import dames_static, sung_tokekar
 
     dames, sung = dames_static().system, sung_tokekar().system
-    assert robot_outputs(dames) == ("goal", "status", "cell", "density", "estimates")
-    assert robot_outputs(dames, publish_density=False) == ("goal", "status", "cell",
-                                                           "estimates")
+    # The node's own, then the step outputs the parts declare in role order (estimator,
+    # exchange, controller); markers are no step topic.
+    assert robot_outputs(dames) == ("goal", "status", "estimates", "density", "cell")
+    assert robot_outputs(dames, publish_density=False) == ("goal", "status", "estimates",
+                                                           "cell")
     assert robot_outputs(sung) == ("goal", "status", "estimates", "components", "tracks")
     assert monitor_density(dames) and not monitor_density(sung)
     topics = step_topics(1, robot_outputs(sung), monitor_density=False)

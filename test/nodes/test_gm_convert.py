@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.nodes.convert import InvalidMessage
-from phd_swarm.nodes.gm_convert import (
+from phd_swarm.nodes.faces.gaussian_mixture import (
     EstimatorView,
     TrackArrays,
     gaussian_mixture,
@@ -85,7 +85,7 @@ def test_a_bad_track_set_is_refused_naming_the_field(spoil, field):
 def test_a_reward_set_travels_exactly_and_a_bad_one_is_refused():
     from geometry_msgs.msg import Point
 
-    from phd_swarm.nodes.meet_merge_wire import reward_points, reward_set
+    from phd_swarm.nodes.faces.meet_merge import reward_points, reward_set
 
     pts = np.array([[1.25, 2.5], [3.0, -0.125]])
     msg = reward_set(4, 7, pts, 1.0, "map", met=[1, 2])

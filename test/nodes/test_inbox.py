@@ -12,7 +12,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from phd_swarm.core.exchange.voronoi_phd.messages import StateMsg
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes.convert import InvalidMessage
-from phd_swarm.nodes.voronoi_wire import WIRE
+from phd_swarm.nodes.faces.voronoi_phd import WIRE
 from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotState
 
 

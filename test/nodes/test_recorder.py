@@ -119,9 +119,13 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     out = tmp_path / "run.mcap"
     rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
                     compression="lz4", wait_for_world=False)
-    # The protocol inboxes only when asked (record_inboxes).
-    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - 1
+    # The protocol inboxes only when asked (record_inboxes); of the declared outputs only
+    # the system's (Dames: density and cell), so no reader waits on a topic nobody writes.
+    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - 1 + 2
     assert not any(t.endswith("/inbox") for t in rec.topics)
+    assert {"/robot_0/density", "/robot_0/cell"} <= set(rec.topics)
+    assert not any(t.endswith(("/components", "/plan", "/markers")) for t in rec.topics
+                   if t.startswith("/robot_"))
     talker = ros.node("talker")
     truth = talker.create_publisher(TargetSet, T.WORLD_TRUTH, publisher_qos("STEP"))
     status = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"),

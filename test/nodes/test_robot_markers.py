@@ -7,9 +7,8 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from visualization_msgs.msg import Marker, MarkerArray
 
-from phd_swarm.nodes.gm_convert import MixtureArrays, TrackArrays
-from phd_swarm.nodes.markers import COLOURS, FOV_SEGMENTS
-from phd_swarm.nodes.robot_markers import (
+from phd_swarm.nodes.faces.gaussian_mixture import MixtureArrays, TrackArrays
+from phd_swarm.nodes.faces.mixture_markers import (
     ELLIPSE_SEGMENTS,
     MAX_COMPONENTS,
     MIN_ALPHA,
@@ -17,6 +16,7 @@ from phd_swarm.nodes.robot_markers import (
     RobotMarkers,
     ellipse_vertices,
 )
+from phd_swarm.nodes.markers import COLOURS, FOV_SEGMENTS
 
 from .test_markers import FRAME, STAMP
 from .test_markers import check_common as check_shared

@@ -7,7 +7,7 @@ import pytest
 from builtin_interfaces.msg import Time
 from visualization_msgs.msg import Marker
 
-from phd_swarm.nodes.sat_markers import MODE_COLOURS, sat_markers
+from phd_swarm.nodes.faces.sat_markers import MODE_COLOURS, sat_markers
 
 STAMP = Time(sec=3)
 

@@ -7,7 +7,7 @@ import pytest
 
 from phd_swarm.core.exchange.sat_share import SatMsg
 from phd_swarm.nodes.convert import InvalidMessage
-from phd_swarm.nodes.sat_share_wire import WIRE, sat_state
+from phd_swarm.nodes.faces.sat_share import WIRE, sat_state
 
 
 def _msg():

@@ -21,9 +21,9 @@ STEPS = 60
 
 @pytest.mark.ros
 def test_lockstep_team_equals_in_memory_engine_with_meetings(tmp_path):
-    from phd_swarm.nodes import gm_convert
     from phd_swarm.nodes import topics as T
-    from phd_swarm.nodes.meet_merge_wire import reward_points
+    from phd_swarm.nodes.faces import gaussian_mixture
+    from phd_swarm.nodes.faces.meet_merge import reward_points
     from phd_swarm.testing import InProcessRos, start_swarm
     from phd_swarm_msgs.msg import GaussianMixture, RewardSet
 
@@ -57,7 +57,7 @@ def test_lockstep_team_equals_in_memory_engine_with_meetings(tmp_path):
         engine.step()
         for r in robots:
             est = engine.agents[r].estimator
-            mix = gm_convert.mixture_from_ros(components[r][k], 1000)
+            mix = gaussian_mixture.mixture_from_ros(components[r][k], 1000)
             assert np.array_equal(mix.weights, est.mixture.weights), (k, r)
             assert np.array_equal(mix.means, est.mixture.means), (k, r)
             assert np.array_equal(reward_points(rewards[r][k]), est.reward_set()), (k, r)

@@ -29,8 +29,8 @@ def _scenario(controller: str = "lawnmower", gp_input: str = "estimates"):
                                                   ("largest_gaussian", "estimates"),
                                                   ("lawnmower", "detections")])
 def test_lockstep_robot_equals_in_memory_engine(tmp_path, controller, gp_input):
-    from phd_swarm.nodes import gm_convert
     from phd_swarm.nodes import topics as T
+    from phd_swarm.nodes.faces import gaussian_mixture
     from phd_swarm.testing import InProcessRos, start_swarm
     from phd_swarm_msgs.msg import GaussianMixture, TrackSet
 
@@ -62,11 +62,11 @@ def test_lockstep_robot_equals_in_memory_engine(tmp_path, controller, gp_input):
     for k in range(STEPS):
         _, truth = engine.world.truth()
         engine.step()
-        mix = gm_convert.mixture_from_ros(components[k], 1000)
+        mix = gaussian_mixture.mixture_from_ros(components[k], 1000)
         assert np.array_equal(mix.weights, est.mixture.weights), k
         assert np.array_equal(mix.means, est.mixture.means), k
         assert np.array_equal(mix.covs, est.mixture.covs), k
-        got = gm_convert.tracks_from_ros(tracks[k], 1000)
+        got = gaussian_mixture.tracks_from_ros(tracks[k], 1000)
         positions, covs, weights, ids = est.targets()
         assert np.array_equal(got.track_ids, ids) and np.array_equal(got.positions, positions)
         assert np.array_equal(got.covs, covs) and np.array_equal(got.weights, weights)

@@ -21,7 +21,8 @@ from phd_swarm.core.exchange.voronoi_phd import messages as core
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.convert import InvalidMessage
-from phd_swarm.nodes.voronoi_wire import WIRE
+from phd_swarm.nodes.faces import voronoi_codec
+from phd_swarm.nodes.faces.voronoi_phd import WIRE
 from phd_swarm.sim import presets as sc
 
 GRID = sc.dames_static().grid
@@ -189,4 +190,4 @@ def test_bytes_that_do_not_decode_are_invalid_messages_naming_the_type(kind):
 
 def test_from_ros_refuses_what_is_not_a_protocol_message():
     with pytest.raises(InvalidMessage, match="not a protocol message: Point"):
-        convert.from_ros(Point(), GRID, MAX_MEASUREMENTS)
+        voronoi_codec.from_ros(Point(), GRID, MAX_MEASUREMENTS)

@@ -13,7 +13,7 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
 )
 from phd_swarm.core.registry import Part, lookup
 from phd_swarm.nodes.convert import InvalidMessage
-from phd_swarm.nodes.voronoi_wire import WIRE
+from phd_swarm.nodes.faces.voronoi_phd import WIRE
 from phd_swarm.nodes.wire import wire_for
 from phd_swarm.sim import presets as sc
 
@@ -39,7 +39,7 @@ def test_a_wire_without_a_codec_of_its_own_goes_through_ros_messages():
     from rclpy.serialization import deserialize_message
 
     from phd_swarm.core.exchange.sat_share import SatMsg
-    from phd_swarm.nodes.sat_share_wire import WIRE as SAT
+    from phd_swarm.nodes.faces.sat_share import WIRE as SAT
     from phd_swarm_msgs.msg import SatState
 
     msg = SatMsg(3, 12, np.array([10.5, 20.25]), True, np.array([[1.0, 2.0]]),

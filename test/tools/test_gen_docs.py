@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from phd_swarm.config import node_params
+from phd_swarm.core import registry
 from phd_swarm.nodes import topics
 from phd_swarm.tools import gen_docs
 
@@ -19,12 +20,20 @@ def test_generated_docs_are_up_to_date():
                             + "\n".join(problems))
 
 
-def test_every_topic_has_a_description():
-    shown = {name for name, _ in gen_docs.documented_topics()}
-    assert len(shown) == len(topics.TEAM_TOPICS) + len(topics.ROBOT_TOPICS)
-    assert shown - set(gen_docs.DESCRIPTIONS) == set(), "topics without a description"
-    assert set(gen_docs.DESCRIPTIONS) - shown == set(), "descriptions of no topic"
-    assert all(d.strip() for d in gen_docs.DESCRIPTIONS.values())
+def test_every_topic_has_a_description_and_every_declared_output_is_shown():
+    shown = gen_docs.documented_topics()
+    fixed = {name for name, _, _ in shown[:len(topics.TEAM_TOPICS)]} | {
+        gen_docs.ROBOT_PATTERN.format(rel) for rel in topics.ROBOT_TOPICS}
+    assert fixed == set(gen_docs.DESCRIPTIONS), "descriptions and fixed topics differ"
+    assert all(text.strip() for _, _, text in shown)
+    declared = {o.topic for role in registry.ROLES for name in registry.names(role)
+                for o in registry.lookup(role, name).outputs}
+    assert {"density", "cell", "components", "markers", "plan"} <= declared
+    assert {name for name, _, _ in shown} == fixed | {
+        gen_docs.ROBOT_PATTERN.format(t) for t in declared}
+    # markers: one row for the Gaussian-mixture estimators, one for the agents' controller
+    rows = [spec for name, spec, _ in shown if name == "/robot_<id>/markers"]
+    assert len(rows) == 2 and "sung_gmphd" in rows[0][3] + rows[1][3]
 
 
 def test_every_scenario_key_has_a_meaning():
@@ -37,7 +46,7 @@ def test_every_scenario_key_has_a_meaning():
 
 def test_every_topic_parameter_and_key_is_in_the_text():
     text = gen_docs.render_topics()
-    for name, (typ, qos_name, _, _) in gen_docs.documented_topics():
+    for name, (typ, qos_name, _, _), _ in gen_docs.documented_topics():
         row = next(line for line in text.splitlines() if line.startswith(f"| `{name}` |"))
         assert f"`{typ}`" in row and f"`{qos_name}`" in row
     params = gen_docs.render_parameters()

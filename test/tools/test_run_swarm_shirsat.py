@@ -14,7 +14,7 @@ import pytest
 
 from phd_swarm.logs.mcap_log import read_messages
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.meet_merge_wire import reward_points
+from phd_swarm.nodes.faces.meet_merge import reward_points
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

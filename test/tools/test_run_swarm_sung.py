@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from phd_swarm.logs.mcap_log import read_messages, summarize
-from phd_swarm.nodes import gm_convert
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.faces import gaussian_mixture
 
 from .conftest import SUNG_RECORDED
 
@@ -47,7 +47,7 @@ def test_tracks_keep_their_ids_and_confirmed_tracks_their_targets(sung_run):
     confirmed_at: dict[int, int] = {}
     newest = -1
     for rec in read_messages(sung_run / "run.mcap", topics=[T.robot_topic(0, "tracks")]):
-        tracks = gm_convert.tracks_from_ros(rec.msg, 10_000)
+        tracks = gaussian_mixture.tracks_from_ros(rec.msg, 10_000)
         k = int(rec.msg.step)
         # Ids are given in creation order and never reused.
         fresh = tracks.track_ids[tracks.life == 1]

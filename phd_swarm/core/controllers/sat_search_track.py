@@ -42,6 +42,7 @@ import numpy as np
 from .. import registry
 from .. import search_map as sm
 from ..agent_moves import action_offsets, admissible_positions
+from ..outputs import Output
 from ..params import ParamSpec
 from ..renyi_tracking import RenyiTracking
 from ..search_plan import (
@@ -320,10 +321,25 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> SatControlSetup:
         bool(opt["track_targets"]), str(opt["overlap_threshold_form"]))
 
 
+_FACE = "phd_swarm.nodes.faces.search_and_track"
+
+#: What an agent publishes of its mode and plans: its own state, its plan, its markers.
+OUTPUTS = (
+    Output("sat_state", "phd_swarm_msgs/msg/SatState", f"{_FACE}:SAT_STATE",
+           "The agent's own state: tracking or searching next, its predicted targets and "
+           "joint-plan agents (Papaioannou et al. Sec. V; no map)."),
+    Output("plan", "nav_msgs/msg/Path", f"{_FACE}:PLAN",
+           "The agent's next goal, then (searching) the nodes of its search plan in order "
+           "(Papaioannou et al. Sec. V-B)."),
+    Output("markers", "visualization_msgs/msg/MarkerArray", f"{_FACE}:MARKERS",
+           "The sensing square coloured by mode (search, track, yield), the plan and the "
+           "estimates, for RViz2 / Foxglove.", qos="OBSERVATION"),
+)
+
 registry.register(
     "controller", "sat_search_track", lambda setup, rid: SatSearchTrack(setup, rid),
     setup=_setup, options=OPTIONS,
     description="Search by plans over the unvisited nodes (greedy, Alg. 1 with agents met), "
                 "track by the Rényi divergence over the 17 moves, resolve tracking overlaps "
                 "(Papaioannou et al. Sec. V-B, V-C).",
-    provides=("sat_modes",), requires=("particles", "search_map"))
+    provides=("sat_modes",), requires=("particles", "search_map"), outputs=OUTPUTS)

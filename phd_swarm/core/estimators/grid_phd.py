@@ -26,6 +26,7 @@ import numpy as np
 from .. import registry
 from ..extraction import ExtractionConfig, expected_cardinality, extract_targets
 from ..grid import Environment, Grid
+from ..outputs import Output
 from ..params import ParamSpec
 from .central_phd import CentralPhdFilter
 
@@ -92,9 +93,15 @@ def central_filter(scenario: Any) -> CentralPhdFilter:
     return CentralPhdFilter(scenario.grid, scenario.models, scenario.extraction)
 
 
+#: The robot's PHD window of the step (Dames eq. 2), which the monitor sums to the team's.
+DENSITY = Output(
+    "density", "phd_swarm_msgs/msg/DensityGrid", "phd_swarm.nodes.faces.grid_phd:DENSITY",
+    "The robot's PHD over a window of the grid, its owned bins (parameter "
+    "`publish_density`); the monitor assembles the team PHD from them.", observed=True)
+
 registry.register(
     "estimator", "grid_phd", lambda estimator, rid: estimator, setup=_setup,
     description="Grid PHD filter (Dames 2020 eq. 3-6), distributed over the robots' cells.",
     options=OPTIONS, provides=("grid_density",),
     requires=("disk_fov", "position_measurement"),
-    central=central_filter, runs_in_exchange=True)
+    outputs=(DENSITY,), central=central_filter, runs_in_exchange=True)

@@ -45,6 +45,7 @@ from scipy.spatial.distance import cdist
 
 from .. import registry
 from .. import search_map as sm
+from ..outputs import Output
 from ..params import ParamSpec
 from ..scan import Scan
 from .base import Estimator
@@ -399,10 +400,18 @@ def _make(setup: PapaioannouSetup, robot_id: int) -> PapaioannouEstimator:
     return PapaioannouEstimator(setup, robot_id, rng)
 
 
+#: The agent's search values of the step.
+SEARCH_MAP = Output(
+    "search_map", "phd_swarm_msgs/msg/DensityGrid",
+    "phd_swarm.nodes.faces.search_and_track:SEARCH_MAP",
+    "The agent's search values p_v, one per node of its search map (Papaioannou et al. "
+    "eq. 10), 0 = never searched, 1 = searched now.")
+
 registry.register(
     "estimator", "papaioannou_sat", _make, setup=_setup,
     description="SAT density: a particle PHD of the targets (NCV, range-bearing, births in "
                 "the sensing square) and the search values of a search map (Papaioannou et "
                 "al. Sec. V-A, eq. 6-10).",
     options=OPTIONS, provides=("particles", "search_map"),
-    requires=("square_fov", "range_bearing_measurement"), figures=step_figures)
+    requires=("square_fov", "range_bearing_measurement"), outputs=(SEARCH_MAP,),
+    figures=step_figures)

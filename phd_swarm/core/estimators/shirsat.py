@@ -65,6 +65,7 @@ from typing import Any
 import numpy as np
 
 from .. import registry
+from ..outputs import Output
 from ..params import ParamSpec
 from ..reward_sets import (
     as_labels,
@@ -82,6 +83,7 @@ from .gm_births import RingBirth
 from .gm_phd import GaussianMixture, GmPhdModel, extract, linear_terms, update_with_terms
 from .gm_reduce import MERGE_METRIC_OPTION
 from .gm_team import PaddedMixtures, predict_rows, prune_and_merge_rows
+from .mixture_outputs import COMPONENTS, MARKERS
 from .shirsat_figures import step_figures
 from .shirsat_labels import estimate_labels, measurement_labels, posterior_labels
 
@@ -472,6 +474,12 @@ def _setup(scenario: Any, system: Any, **runtime: Any) -> ShirsatSetup:
                       {spec.name: system.option(spec.name) for spec in OPTIONS})
 
 
+#: The robot's own reward set of the step and the robots it met.
+REWARD_SET = Output(
+    "reward_set", "phd_swarm_msgs/msg/RewardSet", "phd_swarm.nodes.faces.meet_merge:REWARD_SET",
+    "The robot's reward set M_k (targets extracted so far, merged with those of the robots "
+    "met) and the robots met at step k (Shirsat & Berman eq. 6).")
+
 registry.register(
     "estimator", "shirsat_gmphd", lambda setup, rid: ShirsatEstimator(setup, rid),
     setup=_setup,
@@ -479,4 +487,4 @@ registry.register(
                 "component, and the reward set of the targets extracted so far, merged "
                 "when robots meet (Shirsat & Berman 2021 Sec. V-VI, eq. 6, Alg. 1-3).",
     options=OPTIONS, provides=("gaussian_mixture", "reward_set"), requires=("disk_fov",),
-    figures=step_figures, team_step=step_team)
+    outputs=(COMPONENTS, REWARD_SET, MARKERS), figures=step_figures, team_step=step_team)

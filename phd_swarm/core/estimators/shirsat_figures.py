@@ -22,9 +22,9 @@ the estimated positions (Figs. 6-8). Per step, over the robots given:
 With no robot (all dead) every figure is NaN but ``all_found``, 0.0.
 
 The hook reads only ``reward_set()``, ``reward_labels()`` (if it has one), ``met`` and
-``mixture.weights`` of each estimator,
-which the robots' messages carry (:class:`phd_swarm.nodes.gm_convert.EstimatorView`), so the
-monitor computes the same numbers from a run's messages as the in-memory engine from the
+``mixture.weights`` of each estimator, which the robots' messages carry
+(:class:`phd_swarm.nodes.faces.gaussian_mixture.EstimatorView`), so the monitor
+computes the same numbers from a run's messages as the in-memory engine from the
 estimators.
 """
 

@@ -18,6 +18,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 
+class ProtocolError(RuntimeError):
+    """An exchange's invariant was violated (a bug, or views of the team that disagree).
+
+    Raised by any exchange's step methods; the robot node rejects the step it was starting
+    and says why, whatever the exchange.
+    """
+
+
 class Envelope(NamedTuple):
     """A message addressed to robot ``dst`` by robot ``src``.
 

@@ -138,4 +138,4 @@ registry.register(
                 "exchange their reward sets and keep the union (Shirsat & Berman eq. 6, "
                 "Alg. 2-3).",
     provides=("meetings",), requires=("reward_set",),
-    wire="phd_swarm.nodes.meet_merge_wire:WIRE")
+    wire="phd_swarm.nodes.faces.meet_merge:WIRE")

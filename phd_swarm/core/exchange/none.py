@@ -67,4 +67,4 @@ class NoExchange(Exchange):
 registry.register(
     "exchange", "none", lambda setup, rid: NoExchange(),
     description="No exchange: each robot keeps its estimate to itself (a single robot, "
-                "Sung & Tokekar 2022).", wire="phd_swarm.nodes.none_wire:WIRE")
+                "Sung & Tokekar 2022).", wire="phd_swarm.nodes.faces.none:WIRE")

@@ -165,4 +165,4 @@ registry.register(
     description="Agents within C_R exchange positions, modes, predicted targets and (by the "
                 "event rule) search maps, max-merged (Papaioannou et al. Sec. V-B c-d, V-C b).",
     provides=("sat_view",), requires=("search_map",),
-    view=lambda exchange: exchange.view, wire="phd_swarm.nodes.sat_share_wire:WIRE")
+    view=lambda exchange: exchange.view, wire="phd_swarm.nodes.faces.sat_share:WIRE")

@@ -1,5 +1,9 @@
-"""The error of the distributed filter (:mod:`phd_swarm.core.exchange.voronoi_phd`)."""
+"""The error of the distributed filter (:mod:`phd_swarm.core.exchange.voronoi_phd`).
 
+Every exchange's :class:`~phd_swarm.core.exchange.base.ProtocolError`: the robot node
+catches it without knowing the exchange.
+"""
 
-class ProtocolError(RuntimeError):
-    """An invariant of the distributed filter was violated (a bug or inconsistent views)."""
+from ..base import ProtocolError
+
+__all__ = ["ProtocolError"]

@@ -13,6 +13,7 @@ from typing import Any
 
 from ... import registry
 from ...controllers.base import CellDensity
+from ...outputs import Output
 from .context import TIMEOUT_TICKS, FilterContext
 from .participant import Participant
 
@@ -36,9 +37,15 @@ def view(participant: Participant) -> CellDensity:
                        participant.weights, participant.alpha, participant.count)
 
 
+#: The robot's own cell of the step, for observers.
+CELL = Output(
+    "cell", "phd_swarm_msgs/msg/CellPolygon", "phd_swarm.nodes.faces.voronoi_phd:CELL",
+    "The robot's own cell (Voronoi or power diagram clipped to E), its power weight and "
+    "its neighbours' ids, for observers.")
+
 registry.register(
     "exchange", "voronoi_phd", lambda ctx, rid: Participant(rid, ctx), setup=setup,
     description="Voronoi/power-cell hand-over, phantom prediction and eta partial sums "
                 "(Dames 2020 Alg. 1-2), plus Chen's cumulative layer when asked.",
-    provides=("cell", "cumulative"), requires=("grid_density",), view=view,
-    wire="phd_swarm.nodes.voronoi_wire:WIRE")
+    provides=("cell", "cumulative"), requires=("grid_density",), outputs=(CELL,), view=view,
+    wire="phd_swarm.nodes.faces.voronoi_phd:WIRE")

@@ -43,7 +43,13 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 from phd_swarm.nodes import topics
-from phd_swarm.nodes.gm_convert import MixtureArrays, TrackArrays
+from phd_swarm.nodes.face import Face, Step
+from phd_swarm.nodes.faces.gaussian_mixture import (
+    MixtureArrays,
+    TrackArrays,
+    mixture_arrays,
+    track_arrays,
+)
 from phd_swarm.nodes.markers import (
     COLOURS,
     FOV_LINE_WIDTH,
@@ -325,3 +331,21 @@ class RobotMarkers:
         if len(pts) >= 2:
             line.points = _points(pts)
         return line
+
+
+def _markers(step: Step, memo: dict) -> MarkerArray:
+    if "markers" not in memo:
+        scenario = step.agent.team.scenario
+        memo["markers"] = RobotMarkers(step.robot_id, step.frame_id,
+                                       float(scenario.models.detection.radius))
+    return memo["markers"].build(
+        step.stamp(), step.agent.position, mixture_arrays(step),
+        track_arrays(step) if step.provides("estimator", "tracks") else None,
+        step.agent.controller.planned_path(),
+        step.agent.estimator.reward_set() if step.provides("estimator", "reward_set")
+        else None)
+
+
+#: Output ``markers`` of a Gaussian-mixture estimator: its components, tracks, field of
+#: view and planned path (and its reward set, if it keeps one).
+MARKERS = Face(MarkerArray, _markers)

@@ -1,8 +1,9 @@
-"""The wire format of the ``meet_merge`` exchange: one inbox kind, ``rewards``.
+"""The ROS face of reward sets: the ``meet_merge`` wire (inbox kind ``rewards``), ``reward_set``.
 
 A robot's reward set travels to each robot it meets as a ``phd_swarm_msgs/RewardSet`` of
-kind ``rewards`` in its inbox message (:mod:`phd_swarm.core.exchange.meet_merge`); the same
-type carries the robot's own set of the step on ``reward_set`` (:mod:`.robot_outputs`).
+kind ``rewards`` in its inbox message (:mod:`phd_swarm.core.exchange.meet_merge`,
+:data:`WIRE`); the same type carries the robot's own set of the step on ``reward_set``
+(:data:`REWARD_SET`, declared by the estimators that keep one).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import numpy as np
 
 from phd_swarm.core.exchange.meet_merge import RewardMsg
 from phd_swarm.nodes.convert import InvalidMessage, header, points, u32, xy
+from phd_swarm.nodes.face import Face, Step
 from phd_swarm.nodes.wire import Wire
 from phd_swarm_msgs.msg import RewardSet
 
@@ -44,3 +46,12 @@ def _from_ros(msg: RewardSet, grid, max_measurements: int) -> RewardMsg:
 
 WIRE = Wire(types={"rewards": RewardSet}, kind=lambda msg: "rewards", to_ros=_to_ros,
             from_ros=_from_ros, sender=lambda msg: msg.src, addressee=lambda msg: None)
+
+
+def _own_reward_set(step: Step, memo: dict) -> RewardSet:
+    return reward_set(step.robot_id, step.k, step.agent.estimator.reward_set(), step.dt,
+                      step.frame_id, getattr(step.agent.exchange, "met", ()))
+
+
+#: Output ``reward_set``: the robot's own reward set M_k and the robots met at the step.
+REWARD_SET = Face(RewardSet, _own_reward_set)

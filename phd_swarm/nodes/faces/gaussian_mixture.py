@@ -3,7 +3,7 @@
 A robot whose estimator provides ``gaussian_mixture`` publishes its components as a
 ``phd_swarm_msgs/GaussianMixture`` on ``components``; one that provides ``tracks``
 publishes its targets with their tracks as a ``phd_swarm_msgs/TrackSet`` on ``tracks``
-(:mod:`phd_swarm.nodes.robot_outputs`). The monitor and the log readers take them back with
+(:data:`COMPONENTS`, :data:`TRACKS`). The monitor and the log readers take them back with
 :func:`mixture_from_ros` and :func:`tracks_from_ros`, which raise
 :class:`~phd_swarm.nodes.convert.InvalidMessage` naming the field of a message that cannot
 be right (lengths that disagree, non-finite numbers, negative weights, covariances that are
@@ -19,6 +19,7 @@ import numpy as np
 
 from phd_swarm.core.estimators.checks import check_spd
 from phd_swarm.nodes.convert import InvalidMessage, f64, header, points, u32, xy
+from phd_swarm.nodes.face import Face, Step
 from phd_swarm_msgs.msg import GaussianMixture, TrackSet
 
 
@@ -162,3 +163,41 @@ class EstimatorView:
         if value is None:
             raise AttributeError(f"the robot published no {what}")
         return value
+
+
+def mixture_arrays(step: Step) -> MixtureArrays:
+    """The robot's GM-PHD components at the step (made once per step, shared by faces)."""
+    if "mixture" not in step.cache:
+        mix = step.agent.estimator.mixture
+        step.cache["mixture"] = MixtureArrays(mix.weights, mix.means, mix.covs)
+    return step.cache["mixture"]
+
+
+def track_arrays(step: Step) -> TrackArrays:
+    """The robot's targets with their tracks at the step (made once, shared by faces).
+
+    From the estimator's ``targets()``, ``confirmed_mask()`` and track layer.
+    """
+    if "tracks" not in step.cache:
+        est = step.agent.estimator
+        positions, covs, weights, ids = est.targets()
+        life = np.array([est.tracks.tracks[i].life for i in ids.tolist()], dtype=np.int64)
+        step.cache["tracks"] = TrackArrays(ids, life, est.confirmed_mask(), weights,
+                                           positions, covs)
+    return step.cache["tracks"]
+
+
+def _components(step: Step, memo: dict) -> GaussianMixture:
+    mix = mixture_arrays(step)
+    return gaussian_mixture(step.robot_id, step.k, mix.weights, mix.means, mix.covs,
+                            step.dt, step.frame_id)
+
+
+def _tracks(step: Step, memo: dict) -> TrackSet:
+    return track_set(step.robot_id, step.k, track_arrays(step), step.dt, step.frame_id)
+
+
+#: Output ``components``: the robot's GM-PHD components (Vo & Ma; Sung & Tokekar Layer 1).
+COMPONENTS = Face(GaussianMixture, _components)
+#: Output ``tracks``: the robot's targets with their tracks (Sung & Tokekar Layers 2-3).
+TRACKS = Face(TrackSet, _tracks)

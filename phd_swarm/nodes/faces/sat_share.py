@@ -1,9 +1,10 @@
-"""The wire format of the ``sat_share`` exchange: one inbox kind, ``sat``.
+"""The ROS face of the ``sat_share`` exchange: one inbox kind, ``sat``.
 
 An agent's state of a step (:class:`phd_swarm.core.exchange.sat_share.SatMsg`: position,
 mode, predicted targets, search map by the event rule, joint-plan members) travels to each
 agent in radio range as a ``phd_swarm_msgs/SatState`` of kind ``sat`` in its inbox message;
-the same type carries the agent's own state of the step on ``sat_state`` (:mod:`.robot_outputs`).
+the same type carries the agent's own state of the step on ``sat_state``
+(:mod:`.search_and_track`).
 """
 
 from __future__ import annotations

@@ -1,0 +1,91 @@
+"""The shared machinery names no system: nodes, engines and tools reach parts by declaration.
+
+A system is its own modules (issue 35): its parts under ``core/{sensors,estimators,
+exchange,controllers}`` (and the few system modules still at the core's root), its ROS
+faces under ``nodes/faces``. The robot node, the observers, the engines and the generic
+tools must not import those modules nor name a built-in part by string; they read what the
+parts declare (outputs, wires, hooks). Parsed, not imported, like :mod:`test_layers`.
+
+:data:`PENDING` lists the modules that still do, each to be made neutral in a later slice
+of issue 35; a listed module that no longer offends fails the test, so the list only
+shrinks.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from phd_swarm.core.registry import BUILTIN_PARTS
+
+from .test_layers import PACKAGE, _imports
+
+#: Packages whose modules belong to one system (their ``base`` modules are shared).
+SYSTEM_PACKAGES = ("phd_swarm.core.sensors", "phd_swarm.core.estimators",
+                   "phd_swarm.core.exchange", "phd_swarm.core.controllers",
+                   "phd_swarm.nodes.faces")
+#: Shared modules inside those packages: role bases and the exchange's transport models.
+SHARED = ("phd_swarm.core.exchange.faults", "phd_swarm.core.exchange.contacts",
+          "phd_swarm.core.exchange.radio")
+#: System modules still at the core's root (to move under their role, issue 35 part 4).
+ROOT_SYSTEM_MODULES = tuple(f"phd_swarm.core.{m}" for m in (
+    "cumulative", "search_map", "search_plan", "agent_moves", "renyi_tracking",
+    "tracking_overlap", "grid_graph", "reward_sets"))
+#: Part names too common to tell a system by (``none`` is also an option value).
+COMMON_NAMES = {"none"}
+#: Tools that belong to one paper: its tables, fits and studies.
+PAPER_TOOLS = {"fit_gp.py", "renewal.py", "loss_study.py", "sung_tables.py",
+               "shirsat_tables.py", "papaioannou_tables.py"}
+#: Modules that still name a system (issue 35: the next slices make them neutral).
+PENDING = {"nodes/monitor.py", "engines/central.py",
+           "engines/distributed.py", "tools/evaluate.py", "tools/run_log.py"}
+
+PART_NAMES = {n for names in BUILTIN_PARTS.values() for n in names} - COMMON_NAMES
+
+
+def _system_module(module: str) -> bool:
+    if module.endswith(".base") or module.startswith(SHARED):
+        return False
+    return module.startswith(SYSTEM_PACKAGES) or module.startswith(ROOT_SYSTEM_MODULES)
+
+
+def offences(path: Path, text: str | None = None) -> list[str]:
+    """What in ``path`` names a system: imports of its modules, part names as strings."""
+    source = path.read_text() if text is None else text
+    out = [f"line {line}: imports {m}" for line, m in _imports(path, source)
+           if _system_module(m)]
+    out += [f"line {n.lineno}: names part {n.value!r}" for n in ast.walk(ast.parse(source))
+            if isinstance(n, ast.Constant) and isinstance(n.value, str)
+            and n.value in PART_NAMES]
+    return out
+
+
+SHARED_MODULES = sorted(
+    p for top in ("nodes", "engines", "tools") for p in (PACKAGE / top).rglob("*.py")
+    if "faces" not in p.parts and p.name not in PAPER_TOOLS)
+
+
+def _rel(p: Path) -> str:
+    return str(p.relative_to(PACKAGE))
+
+
+@pytest.mark.parametrize("path", SHARED_MODULES, ids=_rel)
+def test_shared_modules_name_no_system(path):
+    found = offences(path)
+    if _rel(path) in PENDING:
+        assert found, f"{_rel(path)} names no system any more: take it off PENDING"
+    else:
+        assert not found, f"{_rel(path)} names a system: {found}"
+
+
+def test_the_check_sees_system_imports_and_part_names():
+    probe = PACKAGE / "nodes" / "probe.py"
+    text = ("from phd_swarm.nodes.faces.voronoi_phd import WIRE\n"
+            "from phd_swarm.core.controllers.base import Decision\n"
+            "from phd_swarm.core.exchange.faults import LinkFaults\n"
+            "def f(c):\n    return c == 'chen_o' or c == 'none'\n")
+    assert offences(probe, text) == ["line 1: imports phd_swarm.nodes.faces.voronoi_phd",
+                                     "line 5: names part 'chen_o'"]
+    assert all(p.exists() for p in (PACKAGE / m for m in PENDING))
