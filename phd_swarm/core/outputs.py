@@ -107,3 +107,47 @@ def output_topics(parts: Mapping[str, Any], drop: Iterable[str] = (),
     own = () if per_step is False else NODE_OUTPUTS
     return own + tuple(o.topic for o in declared
                        if per_step is None or o.per_step == per_step)
+
+
+@dataclass(frozen=True)
+class Observation:
+    """How the observers score the team from its robots' outputs (declared by the estimator).
+
+    The monitor scores each step live, and ``evaluate`` again from the log, the same way:
+    per robot they wait for ``inputs`` (and the robot's ``estimates``, unless the team
+    estimate is an image), then
+
+    - with ``image`` set (a grid PHD, Dames Sec. IV): add the robots' windows on that topic
+      into the team PHD image, extract the team estimate from it and score that (Dames eq.
+      2, 12);
+    - else: score the union of the robots' own estimates with the sum of their expected
+      counts; and if the estimator has a ``figures`` hook and ``view`` is set, call the
+      hook with one view per robot, built from its inputs by ``view``.
+
+    Attributes
+    ----------
+    inputs : tuple of str
+        Declared outputs read per robot and step.
+    image : str
+        The output whose windows make the team PHD image, or "" (union of estimates).
+    view : str
+        ``"module:NAME"`` of the ROS-side function that turns a robot's read inputs
+        (topic -> value) into what the estimator's ``figures`` hook reads in place of the
+        estimator, or "".
+    meetings : str
+        An input whose messages name the robots met at the step (``met_ids``), drawn by
+        the monitor, or "".
+    """
+
+    inputs: tuple[str, ...] = ()
+    image: str = ""
+    view: str = ""
+    meetings: str = ""
+
+    def __post_init__(self) -> None:
+        for name in (self.image, self.meetings):
+            if name and name not in self.inputs:
+                raise ValueError(f"observation: {name!r} is not one of its inputs "
+                                 f"{list(self.inputs)}")
+        if self.view and ":" not in self.view:
+            raise ValueError(f"observation: view must be 'module:NAME', got {self.view!r}")

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .outputs import Output
+from .outputs import Observation, Output
 from .params import ParamSpec
 
 #: The roles a system is made of, in the order of a step (docs/architecture.md).
@@ -77,6 +77,10 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
 }
 
 
+#: The observation of an estimator that declares none: the union of the robots' estimates.
+NO_OBSERVATION = Observation()
+
+
 class RegistryError(ValueError):
     """An unknown part, a name registered twice, or a plugin that cannot be loaded."""
 
@@ -109,6 +113,8 @@ class Part:
     outputs : tuple of Output
         The topics the part's robots publish besides the node's own
         (:mod:`phd_swarm.core.outputs`).
+    observation : Observation
+        An estimator's: how the observers score the team from those outputs.
     extras : dict
         Role-specific hooks (e.g. ``view`` of an exchange, ``central`` of an estimator).
     """
@@ -123,6 +129,7 @@ class Part:
     requires: frozenset[str] = frozenset()
     extras: dict[str, Any] = field(default_factory=dict)
     outputs: tuple[Output, ...] = ()
+    observation: Observation = NO_OBSERVATION
 
 
 _PARTS: dict[str, dict[str, Part]] = {role: {} for role in ROLES}
@@ -137,7 +144,7 @@ def register(role: str, name: str, make: Callable[[Any, int], Any], *, descripti
              setup: Callable[..., Any] = _no_setup,
              options: Iterable[ParamSpec] = (), provides: Iterable[str] = (),
              requires: Iterable[str] = (), outputs: Iterable[Output] = (),
-             **extras: Any) -> Part:
+             observation: Observation = NO_OBSERVATION, **extras: Any) -> Part:
     """Register a part under ``name`` for ``role``; returns it.
 
     Raises
@@ -151,7 +158,7 @@ def register(role: str, name: str, make: Callable[[Any, int], Any], *, descripti
     if not name.isidentifier() or name.lower() != name:
         raise RegistryError(f"{role} name must be a lower-case identifier, got {name!r}")
     part = Part(role, name, make, setup, description, tuple(options), frozenset(provides),
-                frozenset(requires), dict(extras), tuple(outputs))
+                frozenset(requires), dict(extras), tuple(outputs), observation)
     old = _PARTS[role].get(name)
     if old is not None and old.make.__module__ != make.__module__:
         raise RegistryError(f"{role} {name!r} is already registered by {old.make.__module__}")

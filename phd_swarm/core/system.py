@@ -27,6 +27,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+from .outputs import system_outputs
 from .params import expect_list, expect_mapping, expect_str
 from .registry import ROLES, Part, RegistryError, load_plugins, lookup
 
@@ -151,7 +152,11 @@ def _absolute(plugin: Any, base: Path) -> Any:
 
 
 def _check_fit(parts: dict[str, Part]) -> None:
-    """Refuse parts that do not fit: each needs what the others provide."""
+    """Refuse parts that do not fit.
+
+    Each needs what the others provide, no topic has two writers, and the observers read
+    only declared outputs.
+    """
     available = parts["sensor"].provides | parts["estimator"].provides \
         | parts["exchange"].provides
     for role in ("estimator", "exchange", "controller"):
@@ -160,6 +165,14 @@ def _check_fit(parts: dict[str, Part]) -> None:
             raise ValueError(f"system.{role}: {parts[role].name} needs {missing}, which "
                              f"{', '.join(f'{r} {parts[r].name}' for r in ROLES if r != role)} "
                              f"do not provide")
+    try:
+        declared = {o.topic for o in system_outputs(parts)}
+    except ValueError as exc:
+        raise ValueError(f"system: {exc}") from None
+    unread = [t for t in parts["estimator"].observation.inputs if t not in declared]
+    if unread:
+        raise ValueError(f"system.estimator: {parts['estimator'].name} is observed through "
+                         f"{unread}, which no part of the system publishes")
 
 
 def _resolve_options(parts: dict[str, Part], given: dict[str, Any]) -> tuple:

@@ -76,8 +76,11 @@ def robot_outputs(system: Any, publish_density: bool = True) -> tuple[str, ...]:
 
 
 def monitor_density(system: Any) -> bool:
-    """Whether the monitor of a ``system`` run assembles a team PHD image (grid estimators)."""
-    return "grid_density" in system.parts()["estimator"].provides
+    """Whether the monitor of a ``system`` run assembles a team PHD image.
+
+    It does when the estimator's observation has an ``image`` (the grid PHD).
+    """
+    return bool(system.parts()["estimator"].observation.image)
 
 
 def step_topics(robots: int, outputs: Iterable[str] = ("density", "cell", *ROBOT_OUTPUTS),

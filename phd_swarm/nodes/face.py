@@ -86,10 +86,16 @@ class Face:
         ``build(step: Step, memo: dict)`` -> the message of the step; ``memo`` is the
         face's own, kept per robot from step to step (e.g. the track ids a marker array
         showed last, to delete those gone).
+    read : callable, optional
+        ``read(msg)`` -> the checked value an observer takes from a received message
+        (:class:`~phd_swarm.core.outputs.Observation`); raises
+        :class:`~phd_swarm.nodes.convert.InvalidMessage` naming the field. None: the
+        message itself.
     """
 
     msg_type: type
     build: Callable[[Step, dict[str, Any]], Any]
+    read: Callable[[Any], Any] | None = None
 
 
 def ros_type_name(msg_type: type) -> str:
@@ -99,15 +105,20 @@ def ros_type_name(msg_type: type) -> str:
 
 @cache
 def _load(spec: str) -> Face:
-    module, _, name = spec.partition(":")
-    try:
-        face = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"face {spec!r} cannot be loaded: {type(exc).__name__}: {exc}") \
-            from None
+    face = load_named(spec, "face")
     if not isinstance(face, Face):
         raise ValueError(f"face {spec!r} is a {type(face).__name__}, not a Face")
     return face
+
+
+def load_named(spec: str, what: str) -> Any:
+    """The object ``"module:NAME"`` names (a view builder...); ValueError naming ``what``."""
+    module, _, name = spec.partition(":")
+    try:
+        return getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"{what} {spec!r} cannot be loaded: {type(exc).__name__}: {exc}") \
+            from None
 
 
 def load_face(output: Output) -> Face:

@@ -5,17 +5,20 @@ status and step outputs, and never publishes anything a robot reads. For each st
 the outputs of every robot alive at step k have arrived (a robot the world declared dead
 during step k is not waited for), it
 
-1. for a grid PHD (estimator ``grid_density``; Dames, Chen): adds the robots' density
-   windows into the team PHD image (each bin is owned by exactly one robot, so the sum is
-   the union of the robots' bins, exact in float64) and scores it against the truth of
-   step k (:func:`phd_swarm.core.scoring.score_step`): the team estimate (Dames Sec. IV),
-   the expected number of targets (the total mass, Dames eq. 2) and OSPA (c, p from the
+1. for an estimator observed through an image (its declared
+   :class:`~phd_swarm.core.outputs.Observation`, :mod:`phd_swarm.nodes.observe`; the grid
+   PHD of Dames and Chen): adds the robots' windows into the team PHD image (each bin is
+   owned by exactly one robot, so the sum is the union of the robots' bins, exact in
+   float64) and scores it against the truth of step k
+   (:func:`phd_swarm.core.scoring.score_step`): the team estimate (Dames Sec. IV), the
+   expected number of targets (the total mass, Dames eq. 2) and OSPA (c, p from the
    scenario; Dames eq. 12);
-2. for any other estimator (Sung & Tokekar's GM-PHD): scores the union of the robots' own
-   ``estimates`` with the sum of their expected counts
-   (:func:`phd_swarm.core.scoring.score_estimates`), and computes the estimator part's own
-   figures (its ``figures`` hook, e.g. Sung & Tokekar's tracks and Mahalanobis distances)
-   from the robots' ``components`` and ``tracks`` (:mod:`phd_swarm.nodes.faces.gaussian_mixture`);
+2. for any other estimator (Sung & Tokekar's, Shirsat & Berman's GM-PHD, Papaioannou et
+   al.'s particles): scores the union of the robots' own ``estimates`` with the sum of
+   their expected counts (:func:`phd_swarm.core.scoring.score_estimates`), and computes the
+   estimator part's own figures (its ``figures`` hook, e.g. Sung & Tokekar's tracks and
+   Mahalanobis distances) from the views its observation declares, built from the
+   robots' observed outputs (e.g. ``components`` and ``tracks``);
 3. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` (grid
    only) and ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
@@ -43,28 +46,21 @@ from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
 from phd_swarm.nodes import completeness, convert
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.faces import gaussian_mixture
-from phd_swarm.nodes.faces.meet_merge import reward_points
 from phd_swarm.nodes.markers import team_markers_cdr
+from phd_swarm.nodes.observe import TeamReader, add_windows, union
 from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
-    GaussianMixture,
-    RewardSet,
     RobotStatus,
     TargetSet,
     TeamMetrics,
     TeamState,
-    TrackSet,
 )
 
 #: No robots.
 _NONE: frozenset[int] = frozenset()
-
-#: Most components / targets a robot's message may hold (bigger ones are rejected).
-MAX_COMPONENTS = 100_000
 
 
 class MonitorNode(Node):
@@ -103,16 +99,15 @@ class MonitorNode(Node):
         self.rejected = 0
         self.truth: dict[int, np.ndarray] = {}
         self.alive: dict[int, frozenset[int]] = {}
-        #: Whether the team estimate is a grid PHD image (else the robots' own estimates).
-        self.grid_phd = completeness.monitor_density(self.scenario.system)
-        #: The robot outputs a step waits for: density windows, or estimates (and the
-        #: components and tracks the figures hook reads).
+        #: What a robot's step is made of and how the team's is joined: the estimator's
+        #: declared observation (:mod:`phd_swarm.nodes.observe`).
+        self.reader = TeamReader(self.scenario.system)
+        #: Whether the team estimate is a PHD image (else the robots' own estimates).
+        self.grid_phd = bool(self.reader.image)
         outputs = completeness.robot_outputs(self.scenario.system)
-        self.inputs = (("density",) if self.grid_phd else
-                       tuple(k for k in ("estimates", "components", "tracks", "reward_set")
-                             if k in outputs))
-        part = self.scenario.system.parts()["estimator"]
-        self.figures_hook = (None if self.grid_phd else part.extras.get("figures"))
+        #: The robot outputs a step waits for.
+        self.inputs = self.reader.inputs
+        self.figures_hook = self.reader.figures
         #: Names of the figures the hook returned (row keys of :attr:`series`).
         self.figure_names: list[str] = []
         #: Step -> robot -> output kind -> message.
@@ -127,7 +122,7 @@ class MonitorNode(Node):
         controller = self.scenario.system.parts()["controller"]
         self.grid_nodes = (controller.setup(self.scenario, self.scenario.system).positions
                            if "grid_walk" in controller.provides else None)
-        self.meetings = "reward_set" in self.inputs
+        self.meetings = self.reader.meetings
         self.cells: dict[int, np.ndarray] = {}
         self.positions: dict[int, np.ndarray] = {}
         self.goals: dict[int, np.ndarray] = {}
@@ -152,11 +147,9 @@ class MonitorNode(Node):
                                  subscription_qos("STEP"))
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
-        types = {"density": DensityGrid, "estimates": TargetSet,
-                 "components": GaussianMixture, "tracks": TrackSet, "reward_set": RewardSet}
         for r in ids:
             for kind in self.inputs:
-                self.create_subscription(types[kind], T.robot_topic(r, kind),
+                self.create_subscription(self.reader.types[kind], T.robot_topic(r, kind),
                                          self._output_callback(r, kind),
                                          subscription_qos("STEP"))
             self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
@@ -259,12 +252,10 @@ class MonitorNode(Node):
         image = None
         figures: dict[str, float] = {}
         if self.grid_phd:
-            image = np.zeros(self.grid.shape)
-            for rid in sorted(have):
-                try:
-                    convert.add_density(image, have[rid]["density"], self.grid)
-                except convert.InvalidMessage as exc:
-                    self._reject(f"density of robot {rid} at step {k}: {exc}")
+            topic = self.reader.image
+            image = add_windows(self.grid, {r: got[topic] for r, got in have.items()},
+                                lambda rid, exc: self._reject(
+                                    f"{topic} of robot {rid} at step {k}: {exc}"))
             score = score_step(self.grid, image, truth, self.scenario.extraction,
                                self.scenario.ospa_c, self.scenario.ospa_p)
         else:
@@ -301,7 +292,7 @@ class MonitorNode(Node):
                 self.dt, self.frame_id))
         if self.params["publish_markers"]:
             grid = self.grid_nodes if k % GRID_MARKERS_EVERY == 0 else None
-            met = ([r for r, got in have.items() if len(got["reward_set"].met_ids)]
+            met = ([r for r, got in have.items() if len(got[self.meetings].met_ids)]
                    if self.meetings else None)
             self.markers_pub.publish(team_markers_cdr(
                 stamp, self.frame_id, self.cells, self.positions, self.goals, estimates,
@@ -313,21 +304,17 @@ class MonitorNode(Node):
     def _score_estimates(self, k: int, have: dict[int, dict[str, Any]], truth: np.ndarray
                          ) -> tuple[Any, dict[str, float]]:
         """Score the union of the robots' own estimates; the estimator's figures too."""
-        points, expected, views = [], 0.0, []
+        robots = {}
         for rid in sorted(have):
-            got = have[rid]
             try:
-                points.append(convert.target_positions(got["estimates"]))
-                expected += convert.finite(got["estimates"].expected_cardinality,
-                                           "expected_cardinality", low=0.0)
-                if "components" in got:
-                    views.append(estimator_view(got))
+                robots[rid] = self.reader.read_robot(have[rid])
             except convert.InvalidMessage as exc:
                 self._reject(f"outputs of robot {rid} at step {k}: {exc}")
-        estimates = np.concatenate(points) if points else np.empty((0, 2))
+        estimates, expected = union(robots)
         score = score_estimates(estimates, expected, truth, self.scenario.ospa_c,
                                 self.scenario.ospa_p)
         figures: dict[str, float] = {}
+        views = self.reader.views(robots)
         if self.figures_hook is not None and views and len(views) == len(have):
             figures = self.figures_hook(views, truth, self.scenario.ospa_c,
                                         self.scenario.ospa_p)
@@ -409,21 +396,6 @@ class MonitorNode(Node):
 #: A walk's grid (thousands of points) is drawn at step 0 and every this many steps; its
 #: marker id is fixed, so a viewer keeps it in between.
 GRID_MARKERS_EVERY = 100
-
-
-def estimator_view(got: dict[str, Any]) -> gaussian_mixture.EstimatorView:
-    """A robot's step outputs as the view a ``figures`` hook reads.
-
-    ``components`` and, if the robot publishes them, ``tracks`` and ``reward_set``;
-    InvalidMessage if one is bad.
-    """
-    return gaussian_mixture.EstimatorView(
-        gaussian_mixture.mixture_from_ros(got["components"], MAX_COMPONENTS),
-        gaussian_mixture.tracks_from_ros(got["tracks"], MAX_COMPONENTS) if "tracks" in got
-        else None,
-        reward_points(got["reward_set"]) if "reward_set" in got else None,
-        np.array(got["reward_set"].met_ids, dtype=np.int64) if "reward_set" in got
-        else np.empty(0, dtype=np.int64))
 
 
 def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, float | None]:

@@ -32,7 +32,8 @@ Writes into ``--out`` (default: ``evaluation/`` next to the log):
 - ``figures.png`` (non-grid systems with figures): the estimator's figures over time
   (components and tracks, their weights, Mahalanobis distances, the largest variance);
 - ``snapshot_<t>s.png`` for each ``--snapshot T`` (default: the last step): for a grid PHD
-  the team PHD, with Chen's cumulative density beside it for ``chen_o`` runs (or with
+  the team PHD, with Chen's cumulative density beside it when the controller steers by it
+  (``chen_o``, which requires ``cumulative``; or with
   ``--cumulative``); otherwise the robots' paths so far and their components' 2-sigma
   ellipses;
 - ``--animate FILE.gif`` (or ``.mp4`` with ffmpeg): snapshots every ``--every`` steps.
@@ -54,7 +55,6 @@ import numpy as np
 
 from phd_swarm.core.scoring import StepScore, score_estimates, score_step, series_summary
 from phd_swarm.logs.mcap_log import LogError
-from phd_swarm.nodes.faces.gaussian_mixture import EstimatorView
 from phd_swarm.nodes.monitor import figure_means
 from phd_swarm.tools.log_check import WARNING, check_log
 from phd_swarm.tools.plots import (
@@ -83,13 +83,13 @@ class Kept:
         The team estimate.
     image : np.ndarray (ny, nx) or None
         The team PHD (grid systems).
-    views : list of EstimatorView
+    views : list
         The robots' components and tracks (non-grid systems).
     """
 
     estimates: np.ndarray
     image: np.ndarray | None = None
-    views: list[EstimatorView] = field(default_factory=list)
+    views: list[Any] = field(default_factory=list)
 
 
 def evaluate(run: RunLog, keep: set[int] | None = None
@@ -147,7 +147,7 @@ def _score_estimates(run: RunLog, keep: set[int]
     with the sum of the expected counts; the figures hook given every robot's view.
     """
     s = run.scenario
-    hook = s.system.parts()["estimator"].extras.get("figures")
+    hook = run.reader.figures
     rows: list[dict[str, Any]] = []
     kept: dict[int, Kept] = {}
     for k, estimates, expected, views, reporters in run.team_estimates():
@@ -251,7 +251,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="animation: one frame every N steps (default 10)")
     p.add_argument("--fps", type=float, default=5.0, help="animation frame rate (default 5)")
     p.add_argument("--cumulative", action="store_true",
-                   help="show Chen's cumulative density beside the PHD (default: for chen_o)")
+                   help="show Chen's cumulative density beside the PHD (default: when the "
+                   "controller steers by it, Chen's O)")
     p.add_argument("--no-plots", action="store_true", help="only evaluation.json and CSV")
     p.add_argument("--quiet", action="store_true", help="no summary on stdout")
     return p
@@ -292,7 +293,7 @@ def main(argv: list[str] | None = None) -> int:
                "monitor_agreement": agreement(rows),
                "log_completeness": report.to_dict()}
     names = figure_names(rows)
-    if not run.grid_phd and s.system.parts()["estimator"].extras.get("figures"):
+    if run.reader.figures is not None:
         summary["figures"] = figure_means(rows, names)
     if not report.complete:
         print(f"{prog}: {WARNING}: {report.describe()}", file=sys.stderr)
@@ -305,7 +306,8 @@ def main(argv: list[str] | None = None) -> int:
         written.append(save_series(rows, out / "ospa.png", title=title, reference=monitor))
         if figure_panels(names):
             written.append(save_figures(rows, out / "figures.png", title=title))
-        show_cum = args.cumulative or run.controller == "chen_o"
+        # A controller that steers by the cumulative density (Chen's O) shows it by default.
+        show_cum = args.cumulative or "cumulative" in s.system.parts()["controller"].requires
         cum = run.cumulative_images(set(snaps) | set(anim)) if show_cum else {}
         paths = None if run.grid_phd else run.paths()
         for k in snaps:

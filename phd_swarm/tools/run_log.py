@@ -10,17 +10,18 @@ estimate is made of (below):
   (``/robot_<i>/cell``) and scan (``/robot_<i>/measurements``: sensor position and
   measurements), and the live monitor's metrics (``/monitor/metrics``) when recorded.
 
-What the team estimate is made of depends on the system (:attr:`RunLog.grid_phd`); it is
-streamed, not kept, so memory stays at a few steps whatever the run's length:
+What the team estimate is made of is what the estimator declares (its observation, read
+with the monitor's :class:`~phd_swarm.nodes.observe.TeamReader`, :attr:`RunLog.reader`); it
+is streamed, not kept, so memory stays at a few steps whatever the run's length:
 
-- a grid PHD (Dames, Chen): the robots' PHD windows (``/robot_<i>/density``) are large (the
-  whole map per step); :meth:`RunLog.team_images` yields one team PHD image per step,
-  assembled exactly as the live monitor assembles it (windows added in robot-id order);
-- any other estimator (Sung & Tokekar's GM-PHD): :meth:`RunLog.team_estimates` yields per
-  step the robots' own estimates (``/robot_<i>/estimates``) and, for the estimator's figures,
-  their components and tracks (``components``, ``tracks``), one
-  :class:`~phd_swarm.nodes.faces.gaussian_mixture.EstimatorView` per robot, checked as the monitor
-  checks them (:mod:`phd_swarm.nodes.faces.gaussian_mixture`).
+- an image (the grid PHD of Dames and Chen): the robots' PHD windows
+  (``/robot_<i>/density``) are large (the whole map per step); :meth:`RunLog.team_images`
+  yields one team PHD image per step, assembled exactly as the live monitor assembles it
+  (windows added in robot-id order);
+- any other estimator: :meth:`RunLog.team_estimates` yields per step the robots' own
+  estimates (``/robot_<i>/estimates``) and, for the estimator's figures, one view per
+  robot built from the outputs it is observed through (e.g. Sung & Tokekar's
+  ``components`` and ``tracks``), each message checked as the monitor checks it.
 
 Messages are deserialised with rclpy's C type support (the installed message classes), not
 decoded in Python.
@@ -36,6 +37,7 @@ import re
 from collections import defaultdict
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -48,20 +50,17 @@ from phd_swarm.core.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.completeness import monitor_density, reporters, robot_outputs
-from phd_swarm.nodes.faces import gaussian_mixture
-from phd_swarm.nodes.monitor import MAX_COMPONENTS
+from phd_swarm.nodes.completeness import reporters
+from phd_swarm.nodes.observe import TeamReader, add_windows, union
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
-    GaussianMixture,
     MeasurementSet,
     RobotStatus,
     TargetSet,
     TeamMetrics,
     TeamState,
-    TrackSet,
 )
 
 logger = logging.getLogger(__name__)
@@ -124,12 +123,8 @@ class TeamEstimate(NamedTuple):
     step: int
     estimates: np.ndarray
     expected: float
-    views: list[gaussian_mixture.EstimatorView]
+    views: list[Any]
     reporters: tuple[int, ...]
-
-
-#: Output kinds a non-grid step is made of, and their message classes.
-_ESTIMATE_TYPES = {"estimates": TargetSet, "components": GaussianMixture, "tracks": TrackSet}
 
 
 @dataclass
@@ -163,22 +158,24 @@ class RunLog:
         """The robots' controller (``phd``, ``uniform``, ``chen_p``, ``chen_o``, ...)."""
         return self.config.scenario.system.controller
 
+    @cached_property
+    def reader(self) -> TeamReader:
+        """How the monitor read the robots of this run (the estimator's observation)."""
+        return TeamReader(self.scenario.system)
+
     @property
     def grid_phd(self) -> bool:
-        """Whether the team estimate is a grid PHD image (the monitor's rule), not the robots'."""
-        return monitor_density(self.scenario.system)
+        """Whether the team estimate is a PHD image (the monitor's rule), not the robots'."""
+        return bool(self.reader.image)
 
     @property
     def step_inputs(self) -> tuple[str, ...]:
         """The robot output kinds a step is made of, as the monitor waits for them.
 
-        ``("density",)`` for a grid PHD; else ``estimates`` and those of ``components`` and
-        ``tracks`` the system's robots publish.
+        The window topic of an image (``("density",)`` for a grid PHD); else ``estimates``
+        and the outputs the estimator is observed through (``components``...).
         """
-        if self.grid_phd:
-            return ("density",)
-        outputs = robot_outputs(self.scenario.system)
-        return tuple(k for k in _ESTIMATE_TYPES if k in outputs)
+        return self.reader.inputs
 
     def paths(self) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         """Each robot's path: its steps (S,) and positions (S, 2) in the team states."""
@@ -208,23 +205,22 @@ class RunLog:
         grid = self.scenario.grid
         pending: dict[int, dict[int, DensityGrid]] = defaultdict(dict)
         done: set[int] = set()
-        topics = [T.robot_topic(r, "density") for r in range(self.scenario.robots)]
+        kind = self.reader.image
+        topics = [T.robot_topic(r, kind) for r in range(self.scenario.robots)]
 
         def assemble(k: int) -> tuple[int, np.ndarray, int]:
             windows = pending.pop(k)
-            image = np.zeros(grid.shape)
-            for rid in sorted(windows):
-                try:
-                    convert.add_density(image, windows[rid], grid)
-                except convert.InvalidMessage as exc:
-                    raise LogError(f"{self.path}: density window of robot {rid} at step {k}: "
-                                   f"{exc}") from None
+
+            def refuse(rid: int, exc: convert.InvalidMessage) -> None:
+                raise LogError(f"{self.path}: {kind} window of robot {rid} at step {k}: "
+                               f"{exc}") from None
+
             done.add(k)
-            return k, image, len(windows)
+            return k, add_windows(grid, windows, refuse), len(windows)
 
         with open_log(self.path) as log:
             for rec in log.messages(topics, decode=False):
-                msg = deserialize(rec, DensityGrid, self.path)
+                msg = deserialize(rec, self.reader.types[kind], self.path)
                 k = int(msg.step)
                 if k not in self.steps or k in done or (wanted is not None and k not in wanted):
                     continue
@@ -264,31 +260,35 @@ class RunLog:
         with open_log(self.path) as log:
             for rec in log.messages(list(topics), decode=False):
                 rid, kind = topics[rec.topic]
-                msg = deserialize(rec, _ESTIMATE_TYPES[kind], self.path)
+                msg = deserialize(rec, self.reader.types[kind], self.path)
                 k = int(msg.step)
                 if k not in self.steps or k in done or (wanted is not None and k not in wanted):
                     continue
                 pending[k][rid][kind] = self._checked(rec.topic, kind, msg)
                 if reported(k) >= self.expected_windows(k):
                     done.add(k)
-                    yield _team_estimate(k, pending.pop(k), kinds)
+                    yield self._team_estimate(k, pending.pop(k))
         for k in sorted(pending):
             got = {r: pending[k][r] for r in sorted(reported(k))}
             if got:
-                yield _team_estimate(k, got, kinds)
+                yield self._team_estimate(k, got)
 
     def _checked(self, topic: str, kind: str, msg: Any) -> Any:
-        """A robot output as arrays, checked as the monitor checks it; LogError otherwise."""
+        """A robot output read and checked as the monitor reads it; LogError otherwise."""
         try:
-            if kind == "estimates":
-                return (convert.target_positions(msg),
-                        convert.finite(msg.expected_cardinality, "expected_cardinality",
-                                       low=0.0))
-            if kind == "components":
-                return gaussian_mixture.mixture_from_ros(msg, MAX_COMPONENTS)
-            return gaussian_mixture.tracks_from_ros(msg, MAX_COMPONENTS)
+            return self.reader.read(kind, msg)
         except convert.InvalidMessage as exc:
             raise LogError(f"{self.path}: {topic} at step {int(msg.step)}: {exc}") from None
+
+    def _team_estimate(self, k: int, robots: dict[int, dict[str, Any]]) -> TeamEstimate:
+        """Join the read outputs ``robots`` (robot -> kind -> value) of step k, by robot id.
+
+        Only the robots with every output kind count (the monitor's rule).
+        """
+        kinds = self.reader.inputs
+        full = {r: robots[r] for r in sorted(robots) if len(robots[r]) == len(kinds)}
+        estimates, expected = union(full)
+        return TeamEstimate(k, estimates, expected, self.reader.views(full), tuple(full))
 
     def expected_windows(self, k: int) -> frozenset[int]:
         """Robots whose windows make up step k: alive at k and at k+1 (the monitor's rule)."""
@@ -321,24 +321,6 @@ class RunLog:
             if k in wanted:
                 out[k] = cumulative_weight(alpha, count, mode).reshape(grid.shape)
         return out
-
-
-def _team_estimate(k: int, robots: dict[int, dict[str, Any]], kinds: tuple[str, ...]
-                   ) -> TeamEstimate:
-    """Join the checked outputs ``robots`` (robot -> kind -> arrays) of step k, by robot id.
-
-    Only the robots with every output kind count (the monitor's rule).
-    """
-    ids = tuple(r for r in sorted(robots) if len(robots[r]) == len(kinds))
-    points, expected = [], 0.0
-    for rid in ids:
-        positions, count = robots[rid]["estimates"]
-        points.append(positions)
-        expected += count
-    views = ([gaussian_mixture.EstimatorView(robots[r]["components"], robots[r]["tracks"])
-              for r in ids] if {"components", "tracks"} <= set(kinds) else [])
-    estimates = np.concatenate(points) if points else np.empty((0, 2))
-    return TeamEstimate(k, estimates, expected, views, ids)
 
 
 def config_from_log(path: Path, metadata: dict[str, dict[str, str]]) -> RunConfig:

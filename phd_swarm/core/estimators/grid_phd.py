@@ -26,7 +26,7 @@ import numpy as np
 from .. import registry
 from ..extraction import ExtractionConfig, expected_cardinality, extract_targets
 from ..grid import Environment, Grid
-from ..outputs import Output
+from ..outputs import Observation, Output
 from ..params import ParamSpec
 from .central_phd import CentralPhdFilter
 
@@ -104,4 +104,5 @@ registry.register(
     description="Grid PHD filter (Dames 2020 eq. 3-6), distributed over the robots' cells.",
     options=OPTIONS, provides=("grid_density",),
     requires=("disk_fov", "position_measurement"),
-    outputs=(DENSITY,), central=central_filter, runs_in_exchange=True)
+    outputs=(DENSITY,), observation=Observation(inputs=("density",), image="density"),
+    central=central_filter, runs_in_exchange=True)

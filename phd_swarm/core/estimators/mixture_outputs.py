@@ -9,7 +9,7 @@ for an estimator that keeps tracks) and the markers a viewer draws. Their faces 
 
 from __future__ import annotations
 
-from ..outputs import Output
+from ..outputs import Observation, Output
 
 _FACES = "phd_swarm.nodes.faces"
 
@@ -31,3 +31,15 @@ MARKERS = Output(
     "Covariance ellipses, targets and confirmed track ids, field of view and planned path "
     "(and the reward set, where the estimator keeps one), for RViz2 / Foxglove.",
     qos="OBSERVATION")
+
+#: Builds what a Gaussian-mixture estimator's ``figures`` hook reads from its robot's outputs.
+VIEW = f"{_FACES}.gaussian_mixture:estimator_view"
+
+
+def observation(*inputs: str, meetings: str = "") -> Observation:
+    """How the observers read a Gaussian-mixture estimator.
+
+    Per robot ``components`` and ``inputs``; the union of the robots' estimates scored; the
+    figures from :data:`VIEW`.
+    """
+    return Observation(inputs=("components", *inputs), view=VIEW, meetings=meetings)

@@ -83,7 +83,7 @@ from .gm_births import RingBirth
 from .gm_phd import GaussianMixture, GmPhdModel, extract, linear_terms, update_with_terms
 from .gm_reduce import MERGE_METRIC_OPTION
 from .gm_team import PaddedMixtures, predict_rows, prune_and_merge_rows
-from .mixture_outputs import COMPONENTS, MARKERS
+from .mixture_outputs import COMPONENTS, MARKERS, observation
 from .shirsat_figures import step_figures
 from .shirsat_labels import estimate_labels, measurement_labels, posterior_labels
 
@@ -487,4 +487,6 @@ registry.register(
                 "component, and the reward set of the targets extracted so far, merged "
                 "when robots meet (Shirsat & Berman 2021 Sec. V-VI, eq. 6, Alg. 1-3).",
     options=OPTIONS, provides=("gaussian_mixture", "reward_set"), requires=("disk_fov",),
-    outputs=(COMPONENTS, REWARD_SET, MARKERS), figures=step_figures, team_step=step_team)
+    outputs=(COMPONENTS, REWARD_SET, MARKERS),
+    observation=observation("reward_set", meetings="reward_set"), figures=step_figures,
+    team_step=step_team)

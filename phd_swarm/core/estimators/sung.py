@@ -57,7 +57,7 @@ from .gm_phd_estimator import GmPhdEstimator
 from .gm_reduce import MERGE_METRIC_OPTION
 from .gp_detections import GP_INPUT_OPTION, DetectionHistories, majority_measurement
 from .gp_motion import GpHyperparameters, predict_tracks
-from .mixture_outputs import COMPONENTS, MARKERS, TRACKS
+from .mixture_outputs import COMPONENTS, MARKERS, TRACKS, observation
 from .sung_figures import step_figures
 from .tracks import TrackLayer
 
@@ -374,4 +374,5 @@ registry.register(
     description="GM-PHD with a limited-FoV detection model and update rule, a track layer "
                 "and GP motion prediction (Sung & Tokekar 2022 Sec. V).",
     options=OPTIONS, provides=("gaussian_mixture", "tracks"), requires=("disk_fov",),
-    outputs=(COMPONENTS, TRACKS, MARKERS), figures=step_figures)
+    outputs=(COMPONENTS, TRACKS, MARKERS), observation=observation("tracks"),
+    figures=step_figures)

@@ -14,6 +14,7 @@ filter's state, bit for bit.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -197,7 +198,21 @@ def _tracks(step: Step, memo: dict) -> TrackSet:
     return track_set(step.robot_id, step.k, track_arrays(step), step.dt, step.frame_id)
 
 
+#: Most components / targets a received message may hold (bigger ones are refused).
+MAX_RECEIVED = 100_000
+
 #: Output ``components``: the robot's GM-PHD components (Vo & Ma; Sung & Tokekar Layer 1).
-COMPONENTS = Face(GaussianMixture, _components)
+COMPONENTS = Face(GaussianMixture, _components,
+                  read=lambda msg: mixture_from_ros(msg, MAX_RECEIVED))
 #: Output ``tracks``: the robot's targets with their tracks (Sung & Tokekar Layers 2-3).
-TRACKS = Face(TrackSet, _tracks)
+TRACKS = Face(TrackSet, _tracks, read=lambda msg: tracks_from_ros(msg, MAX_RECEIVED))
+
+
+def estimator_view(values: dict[str, Any]) -> EstimatorView:
+    """What a Gaussian-mixture estimator's ``figures`` hook reads of a robot.
+
+    Built from the robot's read outputs: ``components``, and ``tracks`` and ``reward_set``
+    where the estimator is observed through them (the observation's ``view``).
+    """
+    rewards, met = values.get("reward_set", (None, None))
+    return EstimatorView(values["components"], values.get("tracks"), rewards, met)

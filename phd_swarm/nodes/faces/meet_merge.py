@@ -53,5 +53,10 @@ def _own_reward_set(step: Step, memo: dict) -> RewardSet:
                       step.frame_id, getattr(step.agent.exchange, "met", ()))
 
 
-#: Output ``reward_set``: the robot's own reward set M_k and the robots met at the step.
-REWARD_SET = Face(RewardSet, _own_reward_set)
+def _read_reward_set(msg: RewardSet) -> tuple[np.ndarray, np.ndarray]:
+    return reward_points(msg), np.array(msg.met_ids, dtype=np.int64)
+
+
+#: Output ``reward_set``: the robot's own reward set M_k and the robots met at the step;
+#: read back as (positions (K, 2), robots met).
+REWARD_SET = Face(RewardSet, _own_reward_set, read=_read_reward_set)

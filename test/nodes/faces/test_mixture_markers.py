@@ -18,8 +18,8 @@ from phd_swarm.nodes.faces.mixture_markers import (
 )
 from phd_swarm.nodes.markers import COLOURS, FOV_SEGMENTS
 
-from .test_markers import FRAME, STAMP
-from .test_markers import check_common as check_shared
+from ..test_markers import FRAME, STAMP
+from ..test_markers import check_common as check_shared
 
 NAMESPACES = ["robot_3/robot", "robot_3/fov", "robot_3/components", "robot_3/targets",
               "robot_3/path"]
