@@ -36,6 +36,9 @@ class Scan:
         default) when the sensor gives no labels.
     """
 
+    #: Its message type in ``msg_defs`` (traffic counts, :mod:`phd_swarm.engines`).
+    WIRE_TYPE = "MeasurementSet"
+
     robot_id: int
     step: int
     sensor: np.ndarray

@@ -23,8 +23,9 @@ Steps 0-3 are those of :class:`phd_swarm.core.agent.Agent`, the one agent step t
 robot node runs too, for whatever system ``scenario.system`` names;
 4. the world moves the robots toward their goals and the targets, to step k+1.
 
-With ``reference=True`` a :class:`CentralPhdFilter` is fed the same measurement sets in
-robot-id order, for the equivalence tests.
+With ``reference=True`` the estimator's central form (its ``central`` hook: for the grid
+PHD a :class:`~phd_swarm.core.estimators.central_phd.CentralPhdFilter`) is fed the same
+measurement sets in robot-id order, for the equivalence tests.
 
 Lossy links (``faults``, a :class:`~phd_swarm.core.exchange.faults.LinkFaults`): every
 envelope a robot sends goes through that robot's
@@ -49,11 +50,8 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.agent import Team
-from phd_swarm.core.estimators.central_phd import CentralPhdFilter
-from phd_swarm.core.exchange.base import Envelope
+from phd_swarm.core.exchange.base import ENGINE_TIMEOUT_TICKS, Envelope
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
-from phd_swarm.core.exchange.voronoi_phd.context import TIMEOUT_TICKS
-from phd_swarm.core.exchange.voronoi_phd.messages import Message, TransferKind, TransferMsg
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.world import World
@@ -63,20 +61,12 @@ class DeadlockError(RuntimeError):
     """No robot can make progress and no timeout can help: a protocol bug."""
 
 
-#: ``msg_defs`` names of the protocol messages other than transfers, by class name.
-_TYPE_NAMES = {"StateMsg": "RobotState", "CellMsg": "CellPolygon", "Scan": "MeasurementSet",
-               "EtaPartialMsg": "EtaPartial", "EtaTotalMsg": "EtaTotal"}
+def message_type(msg: Any) -> str:
+    """Name of a message's type as in ``msg_defs``: every message names it (``WIRE_TYPE``).
 
-
-def message_type(msg: Message) -> str:
-    """Name of a message's type as in ``msg_defs`` (phantom transfers counted apart).
-
-    Dames' messages by class name; another exchange's messages name it (``WIRE_TYPE``).
+    Dames' phantom transfers are counted apart from ownership ones.
     """
-    if isinstance(msg, TransferMsg):
-        return "ParticleTransfer" if msg.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
-    wire_type = getattr(type(msg), "WIRE_TYPE", None)
-    return wire_type if wire_type is not None else _TYPE_NAMES[type(msg).__name__]
+    return msg.WIRE_TYPE
 
 
 @dataclass
@@ -125,7 +115,8 @@ class DistributedEngine:
 
     def __init__(self, scenario: Scenario, controller: str | None = None,
                  delivery_seed: int | None = None, reference: bool = False,
-                 timeout_ticks: int = TIMEOUT_TICKS, faults: LinkFaults | None = None) -> None:
+                 timeout_ticks: int = ENGINE_TIMEOUT_TICKS,
+                 faults: LinkFaults | None = None) -> None:
         if controller is not None:
             scenario = scenario.with_system(controller=controller)
         self.scenario = scenario
@@ -141,7 +132,12 @@ class DistributedEngine:
         self.killed: set[int] = set()
         #: Killed robots the team has not yet seen dead at the start of a step.
         self._unseen_dead: set[int] = set()
-        self.central = CentralPhdFilter(self.grid, scenario.models) if reference else None
+        central = self.team.parts["estimator"].extras.get("central")
+        if reference and central is None:
+            raise ValueError(f"reference=True needs an estimator with a central form; "
+                             f"{scenario.system.estimator!r} has none")
+        #: The estimator's central form (its ``central`` hook), fed the same scans.
+        self.central = central(scenario) if reference else None
         self._rng = None if delivery_seed is None else np.random.default_rng(delivery_seed)
         self.traffic: list[StepTraffic] = []
         self.last_scans: dict[int, np.ndarray] = {}

@@ -53,9 +53,8 @@ import numpy as np
 
 from phd_swarm.core.analysis.tracking_bound import tracking_ratio_bound
 from phd_swarm.sim.lifetimes import alive_steps
-from phd_swarm.tools import tables_cli
-from phd_swarm.tools.sung_tables import over_seeds, read_results
 from phd_swarm.tools.sweep import load_series
+from phd_swarm.tools.tables import figure_grid, over_seeds, read_results, run, save_png
 
 #: The paper's readings where it states numbers (Fig. 5a at C_R = 40 m), by sweep name.
 PAPER = {"papaioannou_fig5a": "tracking ratio ~0.25 for 2 agents, 0.83 for 10 at C_R 40 m"}
@@ -181,12 +180,7 @@ def markdown(tables: Sequence[dict[str, Any]]) -> str:
 
 def plot_curves(table: dict[str, Any], path: Path) -> Path:
     """Searched area and OSPA against time, one line per cell (mean over its runs)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    fig, axes = figure_grid(2, 5.0, 3.8)
     for c in table["cells"]:
         label = f"{c['method']}, {c['agents']} agents, {c['targets']} targets"
         axes[0].plot(c["t"], c["searched_curve"], lw=1.1, label=label)
@@ -198,10 +192,7 @@ def plot_curves(table: dict[str, Any], path: Path) -> Path:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=6)
     fig.suptitle(f"{table['name']} (mean over runs)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_png(fig, path, dpi=120)
 
 
 def write(tables: list[dict[str, Any]], out: Path) -> str:
@@ -218,7 +209,7 @@ def write(tables: list[dict[str, Any]], out: Path) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point (see the module docstring); returns the exit code."""
-    return tables_cli.run(argv, "papaioannou_tables", __doc__.split("\n\n")[0],
+    return run(argv, "papaioannou_tables", __doc__.split("\n\n")[0],
                           sweep_table, write)
 
 

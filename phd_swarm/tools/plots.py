@@ -16,19 +16,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import (  # noqa: E402
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import (
     EllipseCollection,
     LineCollection,
     PatchCollection,
 )
-from matplotlib.colors import PowerNorm  # noqa: E402
-from matplotlib.patches import Circle  # noqa: E402
+from matplotlib.colors import PowerNorm, to_rgba
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
 
 #: Colours of the series and markers (colour-blind safe, Okabe-Ito).
 TRUTH_COLOUR = "#009E73"
@@ -48,6 +45,13 @@ FIGURE_PANELS = (
     ("largest variance [m$^2$]", (("largest_variance", "of a confirmed track"),)),
 )
 
+
+
+def new_figure(size: tuple[float, float]) -> Figure:
+    """A figure of ``size`` inches on the Agg canvas (no pyplot state, no display)."""
+    fig = Figure(figsize=size)
+    FigureCanvasAgg(fig)
+    return fig
 
 @dataclass
 class Frame:
@@ -114,7 +118,7 @@ def ellipse_axes(covs: np.ndarray, sigmas: float = 2.0
 def _draw_components(ax: Any, f: Frame) -> None:
     if len(f.component_means):
         widths, heights, angles = ellipse_axes(f.component_covs)
-        colours = np.tile(matplotlib.colors.to_rgba(COMPONENT_COLOUR), (len(widths), 1))
+        colours = np.tile(to_rgba(COMPONENT_COLOUR), (len(widths), 1))
         colours[:, 3] = np.clip(f.component_weights, 0.15, 1.0)
         ax.add_collection(EllipseCollection(
             widths, heights, angles, units="xy", offsets=f.component_means,
@@ -176,7 +180,7 @@ def draw_snapshot(f: Frame, fig: Any | None = None) -> Any:
     if f.cumulative is not None:
         images.append((f.cumulative, "cumulative density $w_c$", "magma", None))
     if fig is None:
-        fig = plt.figure(figsize=(6.2 * len(images), 5.6))
+        fig = new_figure((6.2 * len(images), 5.6))
     fig.clear()
     axes = fig.subplots(1, len(images), squeeze=False)[0]
     xmin, ymin, xmax, ymax = f.extent
@@ -196,7 +200,6 @@ def save_snapshot(f: Frame, path: str | Path, dpi: int = 120) -> Path:
     """Draw ``f`` and write it as a PNG; returns the path."""
     fig = draw_snapshot(f)
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
     return Path(path)
 
 
@@ -229,7 +232,6 @@ def save_animation(frames: Sequence[Frame], path: str | Path, fps: float = 5.0,
         for f in frames:
             draw_snapshot(f, fig)
             writer.grab_frame()
-    plt.close(fig)
     return path
 
 
@@ -243,7 +245,8 @@ def save_series(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "
     drawn dashed, e.g. the live monitor's series.
     """
     t = np.array([r["t"] for r in rows])
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 5.8), sharex=True)
+    fig = new_figure((7.5, 5.8))
+    a1, a2 = fig.subplots(2, 1, sharex=True)
     a1.plot(t, [r["ospa"] for r in rows], color="k", lw=1.4, label="OSPA")
     a1.plot(t, [r["ospa_localisation"] for r in rows], color=ROBOT_COLOUR, lw=0.9,
             label="localisation part")
@@ -271,12 +274,11 @@ def save_series(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "
 
 
 def _save(fig: Any, path: str | Path, title: str) -> Path:
-    """Title ``fig`` (if ``title``), lay it out, write it to ``path`` as a PNG and close it."""
+    """Title ``fig`` (if ``title``), lay it out and write it to ``path`` as a PNG."""
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)
 
 
@@ -308,8 +310,8 @@ def save_figures(rows: Sequence[dict[str, Any]], path: str | Path, title: str = 
         raise ValueError(f"{path}: no figures to draw (none of "
                          f"{[n for _, s in FIGURE_PANELS for n, _ in s]})")
     t = np.array([r["t"] for r in rows])
-    fig, axes = plt.subplots(len(panels), 1, figsize=(7.5, 2.1 * len(panels) + 0.6),
-                             sharex=True, squeeze=False)
+    fig = new_figure((7.5, 2.1 * len(panels) + 0.6))
+    axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)
     colours = ("k", ESTIMATE_COLOUR)
     for ax, (label, series) in zip(axes[:, 0], panels, strict=True):
         for (name, legend), colour in zip(series, colours, strict=False):

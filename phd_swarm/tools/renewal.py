@@ -289,7 +289,8 @@ def simulate_points(robot_counts: Sequence[int], sides: Sequence[float], runs: i
 def save_plot(path: Path, robot_counts: Sequence[int], points: Sequence[SimPoint]) -> Path:
     """Mean inter-arrival time [steps] against the map's side (module docstring)."""
     sides = np.arange(5, 41)
-    fig, ax = plots.plt.subplots(figsize=(7.5, 4.8))
+    fig = plots.new_figure((7.5, 4.8))
+    ax = fig.subplots()
     colours = (plots.ROBOT_COLOUR, plots.ESTIMATE_COLOUR, plots.TRUTH_COLOUR,
                plots.COMPONENT_COLOUR)
     for n, colour in zip(robot_counts, colours, strict=False):
@@ -312,7 +313,6 @@ def save_plot(path: Path, robot_counts: Sequence[int], points: Sequence[SimPoint
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plots.plt.close(fig)
     return path
 
 

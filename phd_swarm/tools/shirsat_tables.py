@@ -53,9 +53,8 @@ import numpy as np
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.analysis.renewal import mean_interarrival
 from phd_swarm.core.grid_graph import GridGraph
-from phd_swarm.tools import tables_cli
-from phd_swarm.tools.sung_tables import over_seeds, read_results
 from phd_swarm.tools.sweep import load_series
+from phd_swarm.tools.tables import figure_grid, over_seeds, read_results, run, save_png
 
 #: The paper's numbers per sweep name: E[tau] [s], t_reward [s], reward [%].
 PAPER = {"shirsat_small": {"interarrival_s": 68.0, "t_reward_s": 150.0},
@@ -215,13 +214,8 @@ def markdown(tables: Sequence[dict[str, Any]]) -> str:
 
 def plot_rewards(tables: Sequence[dict[str, Any]], path: Path) -> Path:
     """Fig. 5b over runs: mean reward cardinality per robot over time, 10-90 % band."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(tables), figsize=(4.2 * len(tables), 3.4), squeeze=False)
-    for ax, t in zip(axes[0], tables, strict=True):
+    fig, axes = figure_grid(len(tables), 4.2, 3.4, cols=len(tables))
+    for ax, t in zip(axes, tables, strict=True):
         n = min(len(c) for _, c in t["curves"])
         stack = np.stack([c[:n] for _, c in t["curves"]])
         time = t["curves"][0][0][:n]
@@ -235,10 +229,7 @@ def plot_rewards(tables: Sequence[dict[str, Any]], path: Path) -> Path:
         ax.set_ylabel("reward cardinality per robot")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_png(fig, path, dpi=120)
 
 
 def write(tables: list[dict[str, Any]], out: Path) -> str:
@@ -252,7 +243,7 @@ def write(tables: list[dict[str, Any]], out: Path) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point (see the module docstring); returns the exit code."""
-    return tables_cli.run(argv, "shirsat_tables", __doc__.split("\n\n")[0], sweep_table,
+    return run(argv, "shirsat_tables", __doc__.split("\n\n")[0], sweep_table,
                           write)
 
 

@@ -58,36 +58,22 @@ row whose series file is missing).
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import json
 import math
 import sys
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 
+from phd_swarm.tools.sung_plots import plot_boxes, plot_time
 from phd_swarm.tools.sweep import load_series
-from phd_swarm.tools.sweep_plots import COLOURS, legend_columns
+from phd_swarm.tools.tables import TablesError, over_seeds, read_results
 
 #: At most this many points per time series in the plots (every k-th step).
 MAX_POINTS = 750
-
-#: Resolution of the PNG files [dots per inch]; lowered for a file above :data:`MAX_BYTES`.
-DPI = 90
-
-#: Largest PNG file wanted [bytes].
-MAX_BYTES = 200_000
-
-#: Band of the time plots: these percentiles over the seeds at each step.
-BAND = (10.0, 90.0)
 
 #: Per-run quantities: key -> label in the tables.
 QUANTITIES: dict[str, str] = {
@@ -186,16 +172,8 @@ TABLES: tuple[tuple[str, dict[str, str], tuple[str, ...]], ...] = (
 PLOTTED = ("t", "cardinality_true", "tracks", "components", "mahal_closest", "mahal_second",
            "ospa", "ospa_tracks", "largest_variance")
 
-#: The box plots: per-run quantity and axis label.
-BOXES = (("tracks_mean", "mean number of tracks"),
-         ("components_mean", "mean number of components"),
-         ("weights_components_mean", "mean sum of weights"),
-         ("mahal_closest_mean", "mean Mahalanobis to closest"),
-         ("ospa_mean", "mean OSPA [m]"))
-
-
-class SungTablesError(Exception):
-    """A sweep directory that cannot be read (the message says why)."""
+#: A sweep directory the tables cannot be made from (:class:`tables.TablesError`).
+SungTablesError = TablesError
 
 
 def paper_group(method: str) -> str | None:
@@ -279,27 +257,6 @@ def run_values(series: dict[str, np.ndarray]) -> dict[str, float]:
     return out
 
 
-def over_seeds(values: Sequence[float]) -> dict[str, float]:
-    """Mean, sample sd (``ddof=1``) and counts of per-run values, NaNs left out.
-
-    Parameters
-    ----------
-    values : sequence of float
-        One value per run (seed).
-
-    Returns
-    -------
-    dict
-        ``mean`` and ``sd`` (NaN if no or only one defined value for ``sd``), ``n_valid``
-        (defined values) and ``n`` (runs).
-    """
-    v = np.asarray(values, dtype=float)
-    ok = v[np.isfinite(v)]
-    mean = float(ok.mean()) if len(ok) else math.nan
-    sd = float(ok.std(ddof=1)) if len(ok) > 1 else math.nan
-    return {"mean": mean, "sd": sd, "n_valid": int(len(ok)), "n": int(len(v))}
-
-
 # ---------------------------------------------------------------------------- reading
 @dataclass
 class MethodRuns:
@@ -332,42 +289,6 @@ class Sweep:
     name: str
     figure: str
     methods: dict[str, MethodRuns]
-
-
-def read_results(path: Path) -> list[dict[str, str]]:
-    """The rows of a ``results.csv``, read only (a last line being written is skipped).
-
-    Parameters
-    ----------
-    path : Path
-        The sweep directory.
-
-    Returns
-    -------
-    list of dict
-        One row per trial (the last row of a trial key that occurs twice).
-
-    Raises
-    ------
-    SungTablesError
-        No ``results.csv``, columns missing, or no finished trial.
-    """
-    csv_path = path / "results.csv"
-    if not path.is_dir():
-        raise SungTablesError(f"{path}: no such directory")
-    if not csv_path.is_file():
-        raise SungTablesError(f"{path}: no results.csv (not a sweep directory?)")
-    text = csv_path.read_text()
-    if text and not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]  # a row being appended: not finished
-    reader = csv.DictReader(io.StringIO(text))
-    missing = {"trial", "method", "seed"} - set(reader.fieldnames or ())
-    if missing:
-        raise SungTablesError(f"{csv_path}: columns {sorted(missing)} missing")
-    rows = {r["trial"]: r for r in reader}
-    if not rows:
-        raise SungTablesError(f"{csv_path}: no finished trial")
-    return list(rows.values())
 
 
 def _method_order(path: Path, rows: Sequence[dict[str, str]]) -> list[str]:
@@ -564,167 +485,6 @@ def markdown(summ: dict[str, Any]) -> str:
             lines.append(f"| {QUANTITIES[q]} | "
                          + " | ".join(cell(methods[m], q) for m in names) + " |")
     return "\n".join(lines) + "\n"
-
-
-# ------------------------------------------------------------------------------ plots
-def _colours(n: int) -> list[str]:
-    if n <= len(COLOURS):
-        return list(COLOURS[:n])
-    from matplotlib import colormaps
-
-    cmap = colormaps["tab10"]
-    return [cmap(i % 10) for i in range(n)]
-
-
-def _stack(runs: MethodRuns, key: str) -> tuple[np.ndarray, np.ndarray]:
-    """Time and the (runs, steps) array of one series, cut to the shortest run."""
-    n = min(len(s["t"]) for s in runs.series)
-    t = runs.series[0]["t"][:n]
-    return t, np.vstack([s[key][:n] for s in runs.series])
-
-
-def _band(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean and the :data:`BAND` percentiles over runs at each step (NaN-aware)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN steps stay NaN
-        mean = np.nanmean(values, axis=0)
-        lo, hi = np.nanpercentile(values, BAND, axis=0)
-    return mean, lo, hi
-
-
-def _figure(n: int, width: float, height: float) -> tuple[Figure, list]:
-    cols = min(n, 3)
-    rows = -(-n // cols)
-    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(rows, cols, squeeze=False).ravel().tolist()
-    for ax in axes[n:]:
-        ax.set_visible(False)
-    return fig, axes[:n]
-
-
-def _save(fig: Figure, path: Path) -> None:
-    """Save at :data:`DPI`, then at lower resolutions while above :data:`MAX_BYTES`."""
-    dpi = DPI
-    fig.savefig(path, dpi=dpi)
-    while path.stat().st_size > MAX_BYTES and dpi > 50:
-        dpi = int(dpi * 0.8)
-        fig.savefig(path, dpi=dpi)
-
-
-def _title(sweep: Sweep, what: str) -> str:
-    n = sorted({len(r.trials) for r in sweep.methods.values()})
-    runs = f"{n[0]}" if len(n) == 1 else f"{n[0]}-{n[-1]}"
-    head = sweep.figure or "Sung & Tokekar (2022)"
-    return f"{head}\n{sweep.name}: {what}, {runs} seed{'s' if n[-1] > 1 else ''} per method"
-
-
-def _legend(fig: Figure, handles: list) -> None:
-    labels = [h.get_label() for h in handles]
-    fig.legend(handles=handles, loc="outside lower center",
-               ncols=legend_columns(labels, fig.get_figwidth()), fontsize="small")
-
-
-def plot_time(sweep: Sweep, panels: Sequence[tuple[str, str]], path: Path, what: str,
-              truth: bool = False) -> Path:
-    """Per method the mean over seeds and the 10-90 % band of series over time.
-
-    Parameters
-    ----------
-    sweep : Sweep
-        The sweep (:func:`load_sweep`).
-    panels : sequence of (str, str)
-        Series and y-axis label, one panel each.
-    path : Path
-        The PNG file to write.
-    what : str
-        Subject of the figure's title.
-    truth : bool
-        Draw the true number of targets (mean over all runs) as a dashed line.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    fig, axes = _figure(len(panels), 8.0 if len(panels) == 1 else 5.2, 3.5)
-    colours = _colours(len(sweep.methods))
-    handles: list = []
-    for i, (ax, (key, label)) in enumerate(zip(axes, panels, strict=True)):
-        for colour, (m, runs) in zip(colours, sweep.methods.items(), strict=True):
-            t, values = _stack(runs, key)
-            mean, lo, hi = _band(values)
-            line, = ax.plot(t, mean, color=colour, lw=1.0, label=f"{m} (n={len(runs.trials)})")
-            ax.fill_between(t, lo, hi, color=colour, alpha=0.18, lw=0)
-            if i == 0:
-                handles.append(line)
-        if truth:
-            longest = max(sweep.methods.values(), key=lambda r: len(r.series[0]["t"]))
-            t, true = _stack(longest, "cardinality_true")
-            ax.plot(t, np.nanmean(true, axis=0), color="black", lw=1.0, ls="--")
-        ax.set_xlabel("time step [s]")
-        ax.set_ylabel(label)
-        ax.set_ylim(bottom=0)
-        ax.grid(alpha=0.3)
-    if truth:
-        handles.append(Line2D([], [], color="black", lw=1.0, ls="--", label="true number"))
-    handles.append(Line2D([], [], color="grey", lw=6, alpha=0.3,
-                          label=f"{BAND[0]:g}-{BAND[1]:g} % of seeds"))
-    _legend(fig, handles)
-    fig.suptitle(_title(sweep, what + " (mean over seeds)"), fontsize="medium")
-    _save(fig, path)
-    return path
-
-
-def plot_boxes(sweep: Sweep, summ: dict[str, Any], path: Path) -> Path:
-    """Box plots over seeds per method of the per-run values of :data:`BOXES`.
-
-    Parameters
-    ----------
-    sweep : Sweep
-        The sweep (:func:`load_sweep`).
-    summ : dict
-        Its :func:`summary`.
-    path : Path
-        The PNG file to write.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    names = list(summ["methods"])
-    width = max(3.2, 0.55 * len(names) + 1.4)
-    fig, axes = _figure(len(BOXES), width, 3.4)
-    colours = _colours(len(names))
-    for ax, (q, label) in zip(axes, BOXES, strict=True):
-        for j, m in enumerate(names):
-            v = np.asarray(summ["methods"][m]["runs"][q], dtype=float)
-            v = v[np.isfinite(v)]
-            if not len(v):
-                ax.text(j, 0, "n/a", ha="center", va="bottom", fontsize="small")
-                continue
-            c = colours[j]
-            ax.boxplot([v], positions=[j], widths=0.6, patch_artist=True, manage_ticks=False,
-                       boxprops={"facecolor": c, "alpha": 0.45, "edgecolor": c},
-                       medianprops={"color": "black"}, whiskerprops={"color": c},
-                       capprops={"color": c},
-                       flierprops={"marker": "+", "markeredgecolor": c})
-            ax.plot(np.full(len(v), j), v, ".", color=c, markersize=3, alpha=0.8)
-            paper = summ["methods"][m]["paper"].get(q)
-            if paper is not None:
-                ax.plot([j], [paper], marker="*", color="black", markersize=8, ls="none")
-        ax.set_xticks(range(len(names)))
-        tilt = 0.075 * sum(len(m) + 1 for m in names) > 0.8 * width
-        ax.set_xticklabels(names, rotation=35 if tilt else 0, ha="right" if tilt else "center")
-        ax.set_xlim(-0.6, len(names) - 0.4)
-        ax.set_ylabel(label)
-        ax.grid(axis="y", alpha=0.3)
-    _legend(fig, [Line2D([], [], marker="*", color="black", ls="none", markersize=8,
-                         label="paper (one run)")])
-    fig.suptitle(_title(sweep, "per-run values over seeds"), fontsize="medium")
-    _save(fig, path)
-    return path
 
 
 def write_outputs(sweep: Sweep, out: Path) -> list[Path]:

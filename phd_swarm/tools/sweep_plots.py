@@ -28,11 +28,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from phd_swarm.config.sweep_spec import SweepSpec
+from phd_swarm.tools.tables import figure_grid
 
 #: Box colours, one per method in the spec's order (colour-blind safe).
 COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")
@@ -207,17 +206,6 @@ def _panel_title(panel: dict[str, Any], spec: SweepSpec) -> str:
     return ", ".join(parts)
 
 
-def _grid(n: int, width: float, height: float) -> tuple[Figure, list]:
-    cols = min(n, 3)
-    nrows = (n + cols - 1) // cols
-    fig = Figure(figsize=(width * cols, height * nrows), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(nrows, cols, squeeze=False).ravel().tolist()
-    for ax in axes[n:]:
-        ax.set_visible(False)
-    return fig, axes[:n]
-
-
 def legend_columns(labels: Sequence[str], fig_width_in: float) -> int:
     """Columns of a legend under the figure: one row if it fits the figure's width, else more.
 
@@ -247,7 +235,7 @@ def plot_boxes(spec: SweepSpec, rows: Sequence[dict[str, Any]], path: Path) -> P
     grouped = cells(rows)
     x_axis, xs, panels = _panels(spec)
     methods = list(spec.methods)
-    fig, axes = _grid(len(panels), 5.5 if len(xs) > 4 or len(panels) == 1 else 4.2, 3.6)
+    fig, axes = figure_grid(len(panels), 5.5 if len(xs) > 4 or len(panels) == 1 else 4.2, 3.6)
     width = 0.8 / len(methods)
     for ax, panel in zip(axes, panels, strict=True):
         for j, m in enumerate(methods):
@@ -322,7 +310,7 @@ def plot_time(spec: SweepSpec, rows: Sequence[dict[str, Any]], series_dir: Path,
     panels = list(itertools.product(spec.targets, spec.resolutions))
     written = []
     for what in ("ospa", "cardinality"):
-        fig, axes = _grid(len(panels), 5.0, 3.4)
+        fig, axes = figure_grid(len(panels), 5.0, 3.4)
         for ax, (targets, res) in zip(axes, panels, strict=True):
             for j, m in enumerate(spec.methods):
                 acc = means.get((m, targets, res))

@@ -17,6 +17,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+#: Rounds without progress before an exchange gives up a silent peer, in the in-memory
+#: engine (whatever the exchange; the robot node has its own ``timeout_ticks`` parameter).
+ENGINE_TIMEOUT_TICKS = 3
+
 
 class ProtocolError(RuntimeError):
     """An exchange's invariant was violated (a bug, or views of the team that disagree).

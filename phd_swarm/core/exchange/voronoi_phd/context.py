@@ -15,11 +15,12 @@ import numpy as np
 
 from ...grid import Grid
 from ...models import PhdModels
+from ..base import ENGINE_TIMEOUT_TICKS
 
 #: Rounds without progress before an awaited silent peer is declared dead (the in-memory
 #: engines' rounds; the ROS robot counts wall-clock tick periods, its ``timeout_ticks``
 #: parameter, docs/parameters.md).
-TIMEOUT_TICKS = 3
+TIMEOUT_TICKS = ENGINE_TIMEOUT_TICKS
 
 #: Field-of-view disks kept by :meth:`FilterContext.fov_bins`: one per robot of a step,
 #: with room for the largest teams (at 0.1 m bins a disk of 5 m is ~60 kB).

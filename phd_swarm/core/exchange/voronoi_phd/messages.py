@@ -33,6 +33,9 @@ class StateMsg:
     [m]; with the position it decides who must be contacts (see :mod:`.participant`).
     """
 
+    #: Its message type in ``msg_defs`` (traffic counts, :mod:`phd_swarm.engines`).
+    WIRE_TYPE = "RobotState"
+
     robot_id: int
     step: int
     position: np.ndarray
@@ -51,6 +54,9 @@ class CellMsg:
     Besides the cell it carries the neighbour ids and the sender's contact table (the
     states it received this step), from which the receivers learn their contacts' contacts.
     """
+
+    #: Its message type in ``msg_defs`` (traffic counts, :mod:`phd_swarm.engines`).
+    WIRE_TYPE = "CellPolygon"
 
     robot_id: int
     step: int
@@ -74,6 +80,9 @@ class CellMsg:
 class EtaPartialMsg:
     """``EtaPartial``: Dames Alg. 2 line 20."""
 
+    #: Its message type in ``msg_defs`` (traffic counts, :mod:`phd_swarm.engines`).
+    WIRE_TYPE = "EtaPartial"
+
     sender_id: int
     active_id: int
     step: int
@@ -87,6 +96,9 @@ class EtaPartialMsg:
 @dataclass(frozen=True, eq=False)
 class EtaTotalMsg:
     """``EtaTotal``: Dames Alg. 2 line 18."""
+
+    #: Its message type in ``msg_defs`` (traffic counts, :mod:`phd_swarm.engines`).
+    WIRE_TYPE = "EtaTotal"
 
     active_id: int
     step: int
@@ -118,6 +130,11 @@ class TransferMsg:
     count: np.ndarray | None = None
     radius_ids: tuple[int, ...] = ()
     cell_radii: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+    @property
+    def WIRE_TYPE(self) -> str:  # noqa: N802 - the attribute every message type has
+        """``ParticleTransfer``, or ``PhantomTransfer`` for phantom bins (counted apart)."""
+        return "ParticleTransfer" if self.kind == TransferKind.OWNERSHIP else "PhantomTransfer"
 
     def wire_size(self) -> int:
         """Estimated CDR payload size [bytes]."""
