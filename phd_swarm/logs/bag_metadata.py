@@ -42,7 +42,7 @@ order::
 
 Times are the messages' log times (receive times), as rosbag2 takes them from the MCAP
 statistics. The QoS list is the channel metadata ``offered_qos_profiles``
-(:func:`phd_swarm.logs.mcap_log.qos_yaml`) parsed and normalised: policies by name
+(:func:`phd_swarm.logs.qos_yaml.qos_yaml`) parsed and normalised: policies by name
 (version 8's integer policies are converted), durations as ``{sec, nsec}``.
 
 A truncated log (no summary, see :mod:`phd_swarm.logs.mcap_log`) still gets a
@@ -122,7 +122,7 @@ def qos_profiles(text: str) -> list[dict[str, Any]]:
     ----------
     text : str
         The channel metadata value: a YAML list of QoS mappings (:func:`phd_swarm.tools.
-        mcap_log.qos_yaml`, or rosbag2's, with policies by name or, before version 9, by
+        qos_yaml.qos_yaml`, or rosbag2's, with policies by name or, before version 9, by
         rmw enum value); empty for none.
 
     Returns

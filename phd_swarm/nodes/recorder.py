@@ -76,14 +76,9 @@ from rclpy.serialization import deserialize_message
 from phd_swarm.config import load_run_config
 from phd_swarm.config.node_params import RECORDER, SHARED
 from phd_swarm.logs.bag_metadata import write_bag_metadata
-from phd_swarm.logs.mcap_log import (
-    SEPARATOR,
-    DefinitionNotFoundError,
-    LogError,
-    LogWriter,
-    message_definition,
-    qos_yaml,
-)
+from phd_swarm.logs.mcap_log import LogError, LogWriter
+from phd_swarm.logs.qos_yaml import qos_yaml
+from phd_swarm.logs.schemas import SEPARATOR, DefinitionNotFoundError, message_definition
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.params import ParameterError, declare

@@ -21,7 +21,9 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header, String
 
 from phd_swarm.logs import bag_metadata as bm
-from phd_swarm.logs.mcap_log import LogError, LogWriter, installed_type_hash, qos_yaml, summarize
+from phd_swarm.logs.mcap_log import LogError, LogWriter, summarize
+from phd_swarm.logs.qos_yaml import qos_yaml
+from phd_swarm.logs.schemas import installed_type_hash
 from phd_swarm_msgs.msg import CellPolygon, RobotStatus
 
 SEC = 1_000_000_000

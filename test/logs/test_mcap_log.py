@@ -19,19 +19,21 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from phd_swarm.logs import mcap_log
+from phd_swarm.logs import schemas
 from phd_swarm.logs.mcap_log import (
-    SEPARATOR,
-    DefinitionNotFoundError,
     LogError,
     LogWriter,
-    installed_type_hash,
-    message_definition,
     open_log,
-    qos_yaml,
     read_messages,
     read_metadata,
     summarize,
+)
+from phd_swarm.logs.qos_yaml import qos_yaml
+from phd_swarm.logs.schemas import (
+    SEPARATOR,
+    DefinitionNotFoundError,
+    installed_type_hash,
+    message_definition,
 )
 from phd_swarm_msgs.msg import CellPolygon, ParticleTransfer, RobotStatus, TargetSet
 
@@ -136,10 +138,10 @@ def fake_msgs(tmp_path, monkeypatch):
     (msg_dir / "Legacy.msg").write_text("Header header\nInner inner\n")
     monkeypatch.setenv("AMENT_PREFIX_PATH",
                        f"{prefix}{os.pathsep}{os.environ['AMENT_PREFIX_PATH']}")
-    for fn in (message_definition, mcap_log._share_dir, mcap_log._msg_text):
+    for fn in (message_definition, schemas._share_dir, schemas._msg_text):
         fn.cache_clear()
     yield
-    for fn in (message_definition, mcap_log._share_dir, mcap_log._msg_text):
+    for fn in (message_definition, schemas._share_dir, schemas._msg_text):
         fn.cache_clear()
 
 

@@ -20,9 +20,11 @@ from rclpy.qos import (
     qos_profile_sensor_data,
 )
 
-from phd_swarm.logs.mcap_log import qos_yaml, read_messages, summarize
+from phd_swarm.logs.mcap_log import read_messages, summarize
+from phd_swarm.logs.qos_yaml import qos_yaml
 from phd_swarm.nodes.qos import CLOCK, LATCHED, STEP_PUB
-from phd_swarm.tools.replay import Pacer, main, offered_qos
+from phd_swarm.tools.replay import Pacer, main
+from phd_swarm.tools.replay_log import offered_qos
 
 ROOT = Path(__file__).resolve().parents[2]
 REPLAY = str(ROOT / "scripts" / "replay.sh")
