@@ -53,7 +53,7 @@ import numpy as np
 
 from phd_swarm.core.analysis.tracking_bound import tracking_ratio_bound
 from phd_swarm.sim.lifetimes import alive_steps
-from phd_swarm.tools.sweep import load_series
+from phd_swarm.tools.sweep_results import load_series
 from phd_swarm.tools.tables import figure_grid, over_seeds, read_results, run, save_png
 
 #: The paper's readings where it states numbers (Fig. 5a at C_R = 40 m), by sweep name.

@@ -6,7 +6,7 @@ changes from step to step (e.g. one entry per live target, Papaioannou et al.'s
 keeps them as rows and stacks them at the end with :func:`pad_rows`: one (steps, W) array,
 W the longest row, each row padded at its end with -1 (integers) or NaN (floats); a step
 without a value is a row of padding. The arrays travel in the trial's ``.npz`` series as
-they are (integers stay integers, :func:`phd_swarm.tools.sweep.save_series`).
+they are (integers stay integers, :func:`phd_swarm.tools.sweep_results.save_series`).
 """
 
 from __future__ import annotations

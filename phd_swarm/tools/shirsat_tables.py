@@ -53,7 +53,7 @@ import numpy as np
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core.analysis.renewal import mean_interarrival
 from phd_swarm.core.grid_graph import GridGraph
-from phd_swarm.tools.sweep import load_series
+from phd_swarm.tools.sweep_results import load_series
 from phd_swarm.tools.tables import figure_grid, over_seeds, read_results, run, save_png
 
 #: The paper's numbers per sweep name: E[tau] [s], t_reward [s], reward [%].

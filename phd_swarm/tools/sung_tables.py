@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.tools.sung_plots import plot_boxes, plot_time
-from phd_swarm.tools.sweep import load_series
+from phd_swarm.tools.sweep_results import load_series
 from phd_swarm.tools.tables import TablesError, over_seeds, read_results
 
 #: At most this many points per time series in the plots (every k-th step).
@@ -225,7 +225,7 @@ def run_values(series: dict[str, np.ndarray]) -> dict[str, float]:
     Parameters
     ----------
     series : dict of str to np.ndarray
-        Per-step arrays of one trial (:func:`phd_swarm.tools.sweep.load_series`), with the
+        Per-step arrays of one trial (:func:`phd_swarm.tools.sweep_results.load_series`), with the
         figures of :mod:`phd_swarm.core.estimators.sung_figures`.
 
     Returns

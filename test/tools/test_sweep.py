@@ -15,7 +15,7 @@ import pytest
 
 from phd_swarm.config.sweep_spec import SpecError, find_spec, load_spec
 from phd_swarm.engines import make_engine
-from phd_swarm.tools import sweep
+from phd_swarm.tools import sweep, sweep_results
 
 ROOT = Path(__file__).resolve().parents[2]
 SWEEP = str(ROOT / "scripts" / "sweep.sh")
@@ -59,7 +59,7 @@ def _rows(path: Path) -> dict[str, dict[str, str]]:
 
 
 def _without_timing(rows: dict[str, dict[str, str]]) -> dict[str, dict[str, str]]:
-    return {k: {c: v for c, v in r.items() if c not in sweep.TIMING_COLUMNS}
+    return {k: {c: v for c, v in r.items() if c not in sweep_results.TIMING_COLUMNS}
             for k, r in rows.items()}
 
 
@@ -97,7 +97,7 @@ def test_sweep_writes_rows_series_plots_and_summary(tiny):
     # The row's figures are those of the saved series (window 2.5-7.5 s, t = k dt).
     truth = {}
     for key, r in rows.items():
-        s = sweep.load_series(out / "series" / f"{key}.npz")
+        s = sweep_results.load_series(out / "series" / f"{key}.npz")
         assert len(s["t"]) == 15 and str(s["config_hash"]) == r["config_hash"]
         w = (s["t"] >= 2.5) & (s["t"] <= 7.5)
         # The series are float32 (save_series); the row holds the exact figures.
@@ -145,7 +145,7 @@ def test_results_do_not_depend_on_the_number_of_workers(tiny, tmp_path, children
     assert _without_timing(_rows(one / "results.csv")) == _without_timing(
         _rows(two / "results.csv"))
     for f in (two / "series").glob("*.npz"):
-        a, b = sweep.load_series(f), sweep.load_series(one / "series" / f.name)
+        a, b = sweep_results.load_series(f), sweep_results.load_series(one / "series" / f.name)
         assert a.keys() == b.keys()
         for k in a:
             np.testing.assert_array_equal(a[k], b[k])
@@ -166,7 +166,8 @@ def test_distributed_engine_gives_the_central_engines_results(tiny, tmp_path, ch
         assert a[key]["config_hash"] != b[key]["config_hash"]
         for c in ("value", "ospa_final", "ospa_mean_window", "expected_cardinality_final"):
             assert float(b[key][c]) == pytest.approx(float(a[key][c]), rel=1e-9, abs=1e-12)
-        for c in ("cardinality_true_final", "cardinality_est_final", *sweep.PROTOCOL_COLUMNS):
+        for c in ("cardinality_true_final", "cardinality_est_final",
+                  *sweep_results.PROTOCOL_COLUMNS):
             assert a[key][c] == b[key][c], (key, c)
     assert sweep.main([str(spec), "--engine", "distributed", "--out", str(central),
                        "--dry-run"]) == 2
@@ -244,7 +245,7 @@ def test_a_failing_trial_is_reported_not_raised():
 
 def test_plan_runs_seed_by_seed_so_a_partial_sweep_is_balanced(tmp_path):
     spec = load_spec(find_spec("dames_static"))
-    done, todo, stray = sweep.plan(spec, sweep.ResultsFile(tmp_path / "results.csv"))
+    done, todo, stray = sweep.plan(spec, sweep_results.ResultsFile(tmp_path / "results.csv"))
     assert (len(done), len(todo), stray) == (0, 600, 0)
     indices = [t.index for t in todo]
     assert indices == sorted(indices)
@@ -369,7 +370,7 @@ def test_a_method_with_controller_options_runs_with_them(tmp_path):
     assert o.scenario.system.option("cumulative_mode") == "rate"
     row, series = sweep.run_trial(ol)
     assert row["controller"] == "chen_o(cumulative_mode=laplace)" and len(series["t"]) == 15
-    assert all(row[c] == 0 for c in sweep.PROTOCOL_COLUMNS)
+    assert all(row[c] == 0 for c in sweep_results.PROTOCOL_COLUMNS)
 
 
 def test_bad_spec_exits_2_before_any_trial(tmp_path, capsys):
@@ -439,11 +440,11 @@ def test_committed_results_belong_to_their_specs(folder):
     # spec or a preset that would orphan them (or mix them with new ones) fails here.
     out = ROOT / "results" / "sweeps" / folder
     spec = load_spec(find_spec(folder))
-    results = sweep.ResultsFile(out / "results.csv")
+    results = sweep_results.ResultsFile(out / "results.csv")
     done, todo, stray = sweep.plan(spec, results)
     assert stray == 0 and len(done) == len(results.rows) > 0
     for trial in done[:5]:
-        series = sweep.load_series(out / "series" / f"{trial.key}.npz")
+        series = sweep_results.load_series(out / "series" / f"{trial.key}.npz")
         assert str(series["config_hash"]) == trial.config_hash
         assert len(series["ospa"]) == trial.scenario.steps
 
@@ -475,7 +476,7 @@ def test_a_sung_sweep_scores_its_own_estimates_and_saves_the_papers_figures(tmp_
     assert sorted(r["method"] for r in rows) == ["largest_exact", "lawn_exact",
                                                  "nearest_exact"]
     for r in rows:
-        s = sweep.load_series(tmp_path / "series" / f"{r['trial']}.npz")
+        s = sweep_results.load_series(tmp_path / "series" / f"{r['trial']}.npz")
         assert len(s["ospa"]) == 600 and np.all(s["cardinality_true"] == 10)
         assert {"components", "tracks", "mahal_closest", "largest_variance"} <= set(s)
         assert np.nanmax(s["tracks"]) > 0 and np.all(s["ospa"] <= 100.0)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from phd_swarm.tools import sweep
+from phd_swarm.tools import sweep, sweep_results
 
 SPEC = str(Path(__file__).resolve().parents[2] / "examples" / "stationary_sweep.yaml")
 
@@ -22,7 +22,7 @@ def test_recheck_reruns_finished_rows_and_catches_a_changed_one(tmp_path, capsys
     rows = list(csv.DictReader(path.open()))
     rows[0]["ospa_final"] = str(float(rows[0]["ospa_final"]) + 0.5)
     with path.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=sweep.COLUMNS)
+        w = csv.DictWriter(f, fieldnames=sweep_results.COLUMNS)
         w.writeheader()
         w.writerows(rows)
     assert sweep.main([SPEC, "--quick", "--out", str(tmp_path), "--recheck", "2"]) == 1
