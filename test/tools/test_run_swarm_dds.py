@@ -85,13 +85,13 @@ def test_robots_can_be_started_nicer_also_against_other_sessions(tmp_path, monke
     Each child runs in a session of its own; with autogroup scheduling the CPU is shared
     between sessions first, so ``nice -n`` alone would change nothing against the world.
     """
-    from phd_swarm.tools import run_swarm
+    from phd_swarm.tools import processes, run_swarm
 
     assert parse_args(["config/dames_static.yaml"]).robot_nice == run_swarm.ROBOT_NICE == 0
     assert parse_args(["config/dames_static.yaml", "--robot-nice", "7"]).robot_nice == 7
     proc = subprocess.Popen(["sleep", "30"], start_new_session=True)
     try:
-        run_swarm.lower_priority(proc.pid, 7)
+        processes.lower_priority(proc.pid, 7)
         autogroup = Path(f"/proc/{proc.pid}/autogroup")
         if autogroup.exists():
             assert autogroup.read_text().split()[-1] == "7"
@@ -105,9 +105,9 @@ def test_robots_can_be_started_nicer_also_against_other_sessions(tmp_path, monke
             started.append((argv, kwargs["env"]))
             self.pid, self.stdout = 0, iter(())
 
-    monkeypatch.setattr(run_swarm.subprocess, "Popen", FakePopen)
-    monkeypatch.setattr(run_swarm, "lower_priority", lambda pid, nice: started.append(nice))
-    swarm = run_swarm.Swarm(tmp_path, {"A": "1"}, quiet=True)
+    monkeypatch.setattr(processes.subprocess, "Popen", FakePopen)
+    monkeypatch.setattr(processes, "lower_priority", lambda pid, nice: started.append(nice))
+    swarm = processes.Swarm(tmp_path, {"A": "1"}, quiet=True)
     swarm.start("robot_0", "phd_swarm.nodes.robot", ["-p", "robot_id:=0"], nice=7,
                 env={"B": "2"})
     swarm.start("world", "phd_swarm.nodes.world", [])
