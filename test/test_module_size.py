@@ -18,7 +18,7 @@ LIMIT = 600
 
 #: Modules still over the limit (issue 35).
 PENDING = {"core/renyi_tracking.py", "sim/targets.py", "core/analysis/renewal.py",
-           "config/sweep_spec.py", "tools/gen_docs.py"}
+           "tools/gen_docs.py"}
 
 MODULES = sorted(PACKAGE.rglob("*.py"))
 
