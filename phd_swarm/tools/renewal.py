@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from phd_swarm.core.analysis import renewal
+from phd_swarm.core.analysis.renewal_simulation import simulate_meetings, window_averages
 from phd_swarm.core.grid_graph import GridGraph
 from phd_swarm.tools import plots
 
@@ -219,9 +220,10 @@ def single_runs(runs: int, seed: int) -> list[dict[str, float | str]]:
     """The spread of one 300 s run's average inter-arrival time, as the paper measured it.
 
     For each of :data:`RUN_CASES` and each event, ``runs`` runs of 3 robots on 5 x 5 m
-    from uniformly random nodes (:func:`~phd_swarm.core.analysis.renewal.window_averages`,
-    generator ``default_rng([seed, case, event])``); the rows give Kac's mean and the
-    run averages' median and 5-95 % range, in seconds.
+    from uniformly random nodes
+    (:func:`~phd_swarm.core.analysis.renewal_simulation.window_averages`, generator
+    ``default_rng([seed, case, event])``); the rows give Kac's mean and the run averages'
+    median and 5-95 % range, in seconds.
     """
     robots, side, _ = FIG5
     rows: list[dict[str, float | str]] = []
@@ -230,7 +232,7 @@ def single_runs(runs: int, seed: int) -> list[dict[str, float | str]]:
         steps = int(round(RUN_SECONDS / dt))
         for e, event in enumerate(renewal.EVENTS):
             rng = np.random.default_rng([seed, c, e])
-            avg = renewal.window_averages(g, rng, robots, steps, runs, event) * dt
+            avg = window_averages(g, rng, robots, steps, runs, event) * dt
             avg = avg[np.isfinite(avg)]
             lo, med, hi = np.percentile(avg, [5, 50, 95])
             rows.append({"spacing": spacing, "dt": dt, "event": event,
@@ -280,7 +282,7 @@ def simulate_points(robot_counts: Sequence[int], sides: Sequence[float], runs: i
             exact = renewal.mean_interarrival(g, n, "robot")
             steps = int(min(60_000, max(1_000, gaps * exact)))
             rng = np.random.default_rng([seed, n, int(side)])
-            sim = renewal.simulate_meetings(g, rng, n, steps, runs, "robot", "stationary")
+            sim = simulate_meetings(g, rng, n, steps, runs, "robot", "stationary")
             mean, half = sim.interarrival()
             out.append(SimPoint(n, float(side), mean, half, exact))
     return out

@@ -9,6 +9,12 @@ import numpy as np
 import pytest
 
 from phd_swarm.core.analysis import renewal
+from phd_swarm.core.analysis.renewal_simulation import (
+    meeting_events,
+    simulate_meetings,
+    start_nodes,
+    window_averages,
+)
 from phd_swarm.core.grid_graph import GridGraph
 
 #: 3 x 3 nodes with diagonals: degrees 3, 5 and 8, the least uniform stationary law.
@@ -146,12 +152,12 @@ def test_meeting_mask_and_events_by_hand():
     assert renewal.meeting_mask(3, 3, "team")[1, 2, 2]
     assert renewal.meeting_mask(3, 7, "pair").shape == (3, 3)
     nodes = np.array([[1, 2, 2, 5], [0, 1, 2, 3], [4, 4, 4, 4]])
-    pair = renewal.meeting_events(nodes, "pair")  # pairs (0,1) (0,2) (0,3) (1,2) (1,3) (2,3)
+    pair = meeting_events(nodes, "pair")  # pairs (0,1) (0,2) (0,3) (1,2) (1,3) (2,3)
     assert pair.tolist() == [[False, False, False, True, False, False], [False] * 6,
                              [True] * 6]
-    assert renewal.meeting_events(nodes, "robot").tolist() == [
+    assert meeting_events(nodes, "robot").tolist() == [
         [False, True, True, False], [False] * 4, [True] * 4]
-    assert renewal.meeting_events(nodes, "team").tolist() == [[True], [False], [True]]
+    assert meeting_events(nodes, "team").tolist() == [[True], [False], [True]]
 
 
 def test_too_large_a_composite_chain_is_refused():
@@ -167,7 +173,7 @@ def test_too_large_a_composite_chain_is_refused():
 
 @pytest.mark.parametrize("event", renewal.EVENTS)
 def test_kac_mean_agrees_with_a_long_seeded_simulation_and_wrong_formulas_do_not(event):
-    sim = renewal.simulate_meetings(SMALL, np.random.default_rng(2024), 3, 2000, 200, event)
+    sim = simulate_meetings(SMALL, np.random.default_rng(2024), 3, 2000, 200, event)
     assert sim.pending == 0 and sim.walked >= 2000
     mean, half = sim.interarrival(z=4.0)  # a 4-sigma interval: no failure by chance
     exact = renewal.mean_interarrival(SMALL, 3, event)
@@ -187,7 +193,7 @@ def test_kac_mean_agrees_with_a_long_seeded_simulation_and_wrong_formulas_do_not
 
 def test_first_meeting_distribution_and_mean_agree_with_simulation():
     runs = 20_000
-    sim = renewal.simulate_meetings(SMALL, np.random.default_rng(99), 2, 1, runs, "pair",
+    sim = simulate_meetings(SMALL, np.random.default_rng(99), 2, 1, runs, "pair",
                                     "uniform")
     assert sim.censored == 0
     exact = renewal.first_meeting_distribution(SMALL, 2, "pair", "uniform")
@@ -202,23 +208,23 @@ def test_first_meeting_distribution_and_mean_agree_with_simulation():
 
 
 def test_simulation_is_reproducible_and_vectorised_over_runs():
-    a = renewal.simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "robot")
-    b = renewal.simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "robot")
+    a = simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "robot")
+    b = simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "robot")
     assert np.array_equal(a.interval_sums, b.interval_sums)
     assert np.array_equal(a.first, b.first) and a.first.shape == (7, 4)
     assert a.interval_counts.shape == (7,)
-    c = renewal.simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "pair")
+    c = simulate_meetings(SMALL, np.random.default_rng(5), 4, 300, 7, "pair")
     assert c.first.shape == (7, 6)
-    nodes = renewal.start_nodes(SMALL, np.random.default_rng(0), (3, 2), [1, 7])
+    nodes = start_nodes(SMALL, np.random.default_rng(0), (3, 2), [1, 7])
     assert nodes.tolist() == [[1, 7]] * 3
 
 
 def test_window_averages():
-    long = renewal.window_averages(SMALL, np.random.default_rng(1), 3, 4000, 30, "pair")
+    long = window_averages(SMALL, np.random.default_rng(1), 3, 4000, 30, "pair")
     assert long.shape == (30,)
     assert np.mean(long) == pytest.approx(renewal.mean_interarrival(SMALL, 3, "pair"),
                                           rel=0.05)
     big = GridGraph(0.0, 0.0, 20.0, 20.0, 1.0)
-    far = renewal.window_averages(big, np.random.default_rng(1), 2, 2, 4, "pair",
+    far = window_averages(big, np.random.default_rng(1), 2, 2, 4, "pair",
                                   start=[0, big.size - 1])
     assert np.all(np.isnan(far))  # no meeting in 2 steps from opposite corners
