@@ -33,6 +33,7 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from .outputs import Observation, Output
@@ -203,11 +204,55 @@ def names(role: str) -> list[str]:
     return sorted(_PARTS[role])
 
 
+def plugin_module_name(path: str | Path) -> str:
+    """The module name a ``.py`` file is imported under: derived from its absolute path.
+
+    The same in every process, so that two processes importing one file register the
+    same names (and a file imported twice, by two routes, is one module).
+    """
+    resolved = Path(path).resolve()
+    return "phd_swarm_plugin_" + "".join(c if c.isalnum() else "_"
+                                         for c in str(resolved.with_suffix("")))
+
+
+def import_file(path: str | Path) -> ModuleType:
+    """The module of the ``.py`` file at ``path``, imported once (:func:`plugin_module_name`).
+
+    What a plugin file, and a face or wire named by file (``"/path/faces.py:NAME"``,
+    :mod:`phd_swarm.nodes.face`), are loaded with: a plugin is a file, not an importable
+    module, so it is imported by path, not through ``sys.path``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    Exception
+        Whatever the module raises while importing (it is then not kept).
+    """
+    resolved = Path(path).resolve()
+    module_name = plugin_module_name(resolved)
+    module = sys.modules.get(module_name)
+    if module is not None:
+        return module
+    spec = importlib.util.spec_from_file_location(module_name, resolved)
+    if spec is None or spec.loader is None or not resolved.is_file():
+        raise FileNotFoundError(f"no such file {resolved}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[module_name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[module_name]
+        raise
+    return module
+
+
 def load_plugins(plugins: Iterable[str]) -> None:
     """Import the modules that register parts: module names, or paths of ``.py`` files.
 
-    A file is imported once under a module name derived from its absolute path, so that
-    two processes importing the same file register the same names.
+    A file is imported once under a module name derived from its absolute path
+    (:func:`import_file`), so that two processes importing the same file register the
+    same names.
 
     Raises
     ------
@@ -217,21 +262,7 @@ def load_plugins(plugins: Iterable[str]) -> None:
     for plugin in plugins:
         try:
             if plugin.endswith(".py") or "/" in plugin:
-                path = Path(plugin).resolve()
-                module_name = "phd_swarm_plugin_" + "".join(
-                    c if c.isalnum() else "_" for c in str(path.with_suffix("")))
-                if module_name in sys.modules:
-                    continue
-                spec = importlib.util.spec_from_file_location(module_name, path)
-                if spec is None or spec.loader is None or not path.is_file():
-                    raise FileNotFoundError(f"no such file {path}")
-                module = importlib.util.module_from_spec(spec)
-                sys.modules[module_name] = module
-                try:
-                    spec.loader.exec_module(module)
-                except BaseException:
-                    del sys.modules[module_name]
-                    raise
+                import_file(plugin)
             else:
                 importlib.import_module(plugin)
         except RegistryError:

@@ -4,9 +4,10 @@ A part declares what its robots publish as :class:`phd_swarm.core.outputs.Output
 type, QoS, description) and names the output's *face*, ``"module:NAME"``: a :class:`Face`
 that builds the ROS message from the robot's parts once the step is done. The built-in
 parts' faces live in :mod:`phd_swarm.nodes.faces`, one module per part or family; a plugin
-brings its own. The robot node (:mod:`phd_swarm.nodes.robot_outputs`) loads the faces of
-its system with :func:`load_face` and publishes what they build, in the declared order,
-without knowing whose they are.
+brings its own, named by its file (``"/path/to/ros_faces.py:NAME"``, :func:`load_named`).
+The robot node (:mod:`phd_swarm.nodes.robot_outputs`) loads the faces of its system with
+:func:`load_face` and publishes what they build, in the declared order, without knowing
+whose they are.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.outputs import Output
+from phd_swarm.core.registry import import_file
 from phd_swarm.nodes import convert
 
 
@@ -112,11 +114,25 @@ def _load(spec: str) -> Face:
 
 
 def load_named(spec: str, what: str) -> Any:
-    """The object ``"module:NAME"`` names (a view builder...); ValueError naming ``what``."""
-    module, _, name = spec.partition(":")
+    """The object ``"module:NAME"`` names (a face, a wire, a view builder...).
+
+    The module part is a module name (``phd_swarm.nodes.faces.grid_phd:DENSITY``) or the
+    path of a ``.py`` file (``/path/to/ros_faces.py:DETECTIONS``): a plugin's parts are a
+    file, not an importable module, so a file is imported once under the name derived from
+    its absolute path (:func:`phd_swarm.core.registry.import_file`), the same module its
+    other names and a plugin list load.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what``, if the module, the file or the name does not exist.
+    """
+    module, _, name = spec.rpartition(":")
     try:
-        return getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as exc:
+        loaded = (import_file(module) if module.endswith(".py")
+                  else importlib.import_module(module))
+        return getattr(loaded, name)
+    except (ImportError, AttributeError, OSError) as exc:
         raise ValueError(f"{what} {spec!r} cannot be loaded: {type(exc).__name__}: {exc}") \
             from None
 

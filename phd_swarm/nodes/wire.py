@@ -12,7 +12,6 @@ and a wire module; the node is not edited.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import partial
@@ -22,6 +21,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from phd_swarm.core.registry import Part
 from phd_swarm.nodes.convert import InvalidMessage
+from phd_swarm.nodes.face import load_named
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,9 @@ def _decode_via_ros(types: Mapping[str, type], from_ros: Callable, kind: str, da
 def wire_for(exchange: Part) -> Wire:
     """The :class:`Wire` an exchange part names (``extras["wire"] = "module:NAME"``).
 
+    The module part may be the path of a ``.py`` file (a plugin's wire), loaded as faces
+    are (:func:`phd_swarm.nodes.face.load_named`).
+
     Raises
     ------
     ValueError
@@ -100,12 +103,7 @@ def wire_for(exchange: Part) -> Wire:
     if not isinstance(ref, str) or ":" not in ref:
         raise ValueError(f"exchange {exchange.name!r} has no ROS wire format "
                          f"(register it with wire='module:NAME')")
-    module, _, name = ref.partition(":")
-    try:
-        wire = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"exchange {exchange.name!r}: wire {ref!r} cannot be loaded: "
-                         f"{exc}") from None
+    wire = load_named(ref, f"exchange {exchange.name!r}: wire")
     if not isinstance(wire, Wire):
         raise ValueError(f"exchange {exchange.name!r}: {ref!r} is not a Wire")
     return wire

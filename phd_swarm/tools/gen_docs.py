@@ -4,6 +4,9 @@ Usage::
 
     python -m phd_swarm.tools.gen_docs            # (re)write both files
     python -m phd_swarm.tools.gen_docs --check    # exit 1 with a diff summary if stale
+    python -m phd_swarm.tools.gen_docs --plugins my_parts.py --out DIR
+                                                  # topics.md and parameters.md of the
+                                                  # built-in parts and a plugin's, in DIR
 
 The tables come from :mod:`phd_swarm.nodes.topics` (names, types, QoS names, writers,
 rates), :mod:`phd_swarm.nodes.qos` (what each QoS name means for writer and reader),
@@ -13,6 +16,12 @@ rates), :mod:`phd_swarm.nodes.qos` (what each QoS name means for writer and read
 and per scenario key, is kept here in :data:`DESCRIPTIONS` and :data:`SCENARIO_MEANINGS`;
 rendering fails if one is missing, so a new topic or field cannot go undocumented, and the
 test suite runs ``--check`` so the files never go stale.
+
+The package's docs show its own parts only. A user who adds a system from outside the
+package (``scenario.system.plugins``) gets the same two files with the plugin's parts in
+them, their declared outputs in the topic table and their options in the parameter
+tables, with ``--plugins`` (modules or ``.py`` files, as ``system.plugins`` takes them)
+and ``--out``.
 """
 
 from __future__ import annotations
@@ -359,25 +368,40 @@ def _missing(what: str, keys: set[str], table: str) -> None:
 
 
 # ----------------------------------------------------------------------------- topics
-def _builtin_parts() -> list[tuple[str, str, Any]]:
-    """(role, name, part) of every built-in part (a plugin loaded here is not documented)."""
-    return [(role, name, part) for role in registry.ROLES for name in registry.names(role)
-            if (part := registry.lookup(role, name)).make.__module__.startswith("phd_swarm.")]
+def _documented_parts(plugins: Sequence[str] = ()) -> list[tuple[str, str, Any]]:
+    """(role, name, part) of every built-in part, and of the parts ``plugins`` register.
+
+    ``plugins``: modules or ``.py`` files (as ``system.plugins`` lists them), imported here;
+    a plugin loaded into this process by other means (a test, a sweep) is not documented.
+    """
+    registry.load_plugins(plugins)
+    # A part belongs to the module that defines its make (as the registry tells owners).
+    modules = {registry.plugin_module_name(p) if p.endswith(".py") or "/" in p else p
+               for p in plugins}
+    out = []
+    for role in registry.ROLES:
+        for name in registry.names(role):
+            part = registry.lookup(role, name)
+            module = part.make.__module__
+            if module.startswith("phd_swarm.") or module in modules:
+                out.append((role, name, part))
+    return out
 
 
-def documented_topics() -> list[tuple[str, tuple[str, str, str, str], str]]:
+def documented_topics(plugins: Sequence[str] = ()
+                      ) -> list[tuple[str, tuple[str, str, str, str], str]]:
     """Every topic as shown in docs/topics.md: name, (type, QoS name, writer, rate), text.
 
     Team topics first, by their absolute names, then the robot topics as
     ``/robot_<id>/<relative>``: those of every robot, then the outputs the registered parts
     declare (:mod:`phd_swarm.core.outputs`), one row per declaration with the parts that
-    make it.
+    make it: the built-in parts and those ``plugins`` register (:func:`_documented_parts`).
     """
     team = [(name, spec, DESCRIPTIONS.get(name, "")) for name, spec in topics.TEAM_TOPICS.items()]
     own = [(ROBOT_PATTERN.format(rel), spec, DESCRIPTIONS.get(ROBOT_PATTERN.format(rel), ""))
            for rel, spec in topics.ROBOT_TOPICS.items()]
     by: dict[Any, dict[str, list[str]]] = {}
-    for role, name, part in _builtin_parts():
+    for role, name, part in _documented_parts(plugins):
         for out in part.outputs:
             by.setdefault(out, {}).setdefault(role, []).append(f"`{name}`")
 
@@ -414,9 +438,14 @@ def _policy(p: QoSProfile) -> str:
             f"{p.durability.name.lower().replace('_', ' ')}")
 
 
-def render_topics() -> str:
-    """The text of docs/topics.md."""
-    shown = documented_topics()
+def _plugin_sources(plugins: Sequence[str]) -> str:
+    """What the generated line adds for ``plugins`` (nothing without)."""
+    return f" and the plugins {', '.join(plugins)}" if plugins else ""
+
+
+def render_topics(plugins: Sequence[str] = ()) -> str:
+    """The text of docs/topics.md; with ``plugins``, their parts' outputs too."""
+    shown = documented_topics(plugins)
     _missing("topics", {n for n, _, text in shown if not text}, "DESCRIPTIONS")
     _missing("inbox kinds", set(topics.INBOX) - set(INBOX_KINDS), "INBOX_KINDS")
     header = ("topic", "type", "QoS", "writer", "rate", "description")
@@ -435,7 +464,8 @@ def render_topics() -> str:
                         "used by a topic"), qos_rows)
     return TOPICS_TEMPLATE.format(
         generated=_GENERATED.format(
-            sources="phd_swarm/nodes/topics.py, qos.py and the parts' declared outputs"),
+            sources="phd_swarm/nodes/topics.py, qos.py and the parts' declared outputs"
+                    + _plugin_sources(plugins)),
         team_table=_table(header, rows(shown[:n_team])),
         robot_table=_table(header, rows(shown[n_team:])),
         inbox_table=_table(("kind", "type", "carries"),
@@ -478,8 +508,8 @@ def _kinds_using(key: str, meaning: str) -> set[str] | None:
     return kinds or None
 
 
-def render_parameters() -> str:
-    """The text of docs/parameters.md."""
+def render_parameters(plugins: Sequence[str] = ()) -> str:
+    """The text of docs/parameters.md; with ``plugins``, their parts and options too."""
     tables = []
     for heading, block, specs in NODE_TABLES:
         rows = [[f"`{s.name}`", _ROS_TYPE[type(s.default)], f"`{_value(s.default)}`",
@@ -502,9 +532,9 @@ def render_parameters() -> str:
                   for flat in defaults.values()]
         rows.append([f"`scenario.{key}`", *values, meaning])
     scenario_table = _table(("parameter", *defaults, "meaning"), rows)
-    # The package's own parts: a plugin a test or sweep has loaded into this process is
-    # not part of the docs.
-    parts = [part for _, _, part in _builtin_parts()]
+    # The package's own parts (and those of the plugins asked for): a plugin a test or
+    # sweep has loaded into this process is not part of the docs.
+    parts = [part for _, _, part in _documented_parts(plugins)]
     parts_table = _table(("role", "name", "options", "provides", "requires", "description"),
                          [[p.role, f"`{p.name}`",
                            ", ".join(f"`{o.name}`" for o in p.options) or "-",
@@ -518,14 +548,15 @@ def render_parameters() -> str:
                             for o in sorted(options.values(), key=lambda o: o.name)])
     return PARAMETERS_TEMPLATE.format(
         generated=_GENERATED.format(sources="phd_swarm/config/node_params.py, the scenario "
-                                            "presets and the registry"),
+                                            "presets and the registry"
+                                            + _plugin_sources(plugins)),
         node_tables="\n\n".join(tables), scenario_table=scenario_table,
         parts_table=parts_table, options_table=options_table)
 
 
 # ------------------------------------------------------------------------------ files
 #: Generated files, relative to the repository root, and their renderers.
-FILES: dict[str, Callable[[], str]] = {
+FILES: dict[str, Callable[..., str]] = {
     "docs/topics.md": render_topics,
     "docs/parameters.md": render_parameters,
 }
@@ -534,6 +565,21 @@ FILES: dict[str, Callable[[], str]] = {
 def generate() -> dict[str, str]:
     """Relative path -> the text it should have."""
     return {path: render() for path, render in FILES.items()}
+
+
+def write_with_plugins(out: Path, plugins: Sequence[str]) -> list[Path]:
+    """Write topics.md and parameters.md of the built-in parts and ``plugins`` into ``out``.
+
+    ``plugins``: modules or ``.py`` files that register parts (as ``system.plugins``).
+    Returns the files written.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for path, render in FILES.items():
+        target = out / Path(path).name
+        target.write_text(render(plugins))
+        written.append(target)
+    return written
 
 
 def check(root: Path, max_lines: int = 40) -> list[str]:
@@ -587,7 +633,23 @@ def main(argv: Sequence[str] | None = None) -> int:
                         default=Path(os.environ.get("PHD_SWARM_ROOT", ".")),
                         help="repository root (default: $PHD_SWARM_ROOT, set by "
                              "scripts/env.sh, else the current directory)")
+    parser.add_argument("--plugins", nargs="+", default=[], metavar="PLUGIN",
+                        help="also document the parts these modules or .py files register "
+                             "(with --out; the package's docs show its own parts only)")
+    parser.add_argument("--out", type=Path,
+                        help="with --plugins: the directory to write topics.md and "
+                             "parameters.md into")
     args = parser.parse_args(argv)
+    if args.plugins or args.out is not None:
+        if args.check or not args.plugins or args.out is None:
+            parser.error("--plugins and --out go together, without --check (docs/ shows "
+                         "the package's own parts)")
+        try:
+            written = write_with_plugins(args.out, args.plugins)
+        except registry.RegistryError as exc:
+            parser.error(str(exc))
+        print("\n".join(f"wrote {p}" for p in written))
+        return 0
     if args.check:
         problems = check(args.root)
         if problems:
