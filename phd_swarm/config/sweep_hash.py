@@ -119,7 +119,8 @@ def results_revisions(system: SystemConfig) -> dict[str, int]:
     out = {}
     for role, part in system.parts().items():
         module = sys.modules.get(part.make.__module__)
-        n = part.extras.get("results_revision", getattr(module, "RESULTS_REVISION", 1))
+        n = (part.results_revision if part.results_revision is not None
+             else getattr(module, "RESULTS_REVISION", 1))
         if type(n) is not int or n < 1:
             raise ValueError(f"system.{role}: {part.name} declares results revision {n!r}; "
                              f"expected an integer >= 1")

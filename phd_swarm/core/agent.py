@@ -95,7 +95,7 @@ def _refuse_partition_guard(team: Team) -> None:
     contacts' states alone, so only the central engine can apply it.
     """
     part = team.parts["controller"]
-    hook = part.extras.get("power_weight_guard")
+    hook = part.power_weight_guard
     guard = None if hook is None else hook(team.setups["controller"])
     if guard is not None:
         raise ValueError(f"controller {part.name}: option {guard.option} bounds the power "
@@ -146,9 +146,9 @@ class Agent:
         bind = getattr(self.exchange, "bind_controller", None)
         if bind is not None:
             bind(self.controller)
-        self._view = team.parts["exchange"].extras.get("view", lambda exchange: None)
+        self._view = team.parts["exchange"].view or (lambda exchange: None)
         #: Whether this agent runs the estimator, or the exchange does (Dames' grid PHD).
-        self._runs_estimator = not team.parts["estimator"].extras.get("runs_in_exchange")
+        self._runs_estimator = not team.parts["estimator"].runs_in_exchange
         self.power_weight = 0.0
         self.position = np.zeros(2)
         self.z = np.empty((0, 2))

@@ -31,7 +31,7 @@ import importlib
 import importlib.util
 import sys
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -82,6 +82,16 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
 NO_OBSERVATION = Observation()
 
 
+#: Hook -> the roles that may declare it (:class:`Part`); ``results_revision`` any role.
+HOOKS: dict[str, tuple[str, ...]] = {
+    "simulate": ("sensor",), "simulate_labelled": ("sensor",),
+    "central": ("estimator",), "runs_in_exchange": ("estimator",),
+    "team_step": ("estimator",), "figures": ("estimator", "controller"),
+    "view": ("exchange",), "wire": ("exchange",),
+    "power_weight_guard": ("controller",), "results_revision": ROLES,
+}
+
+
 class RegistryError(ValueError):
     """An unknown part, a name registered twice, or a plugin that cannot be loaded."""
 
@@ -116,8 +126,31 @@ class Part:
         (:mod:`phd_swarm.core.outputs`).
     observation : Observation
         An estimator's: how the observers score the team from those outputs.
-    extras : dict
-        Role-specific hooks (e.g. ``view`` of an exchange, ``central`` of an estimator).
+
+    The role's hooks (:data:`HOOKS`: which role may declare which; None or empty when the
+    part has none):
+
+    simulate, simulate_labelled : callable
+        A sensor's scan of the true targets from a pose (the world's), with labels.
+    central : callable
+        An estimator's central form: ``central(scenario)`` -> the team's filter over the
+        whole map (the central engine's estimator, the distributed engine's reference).
+    runs_in_exchange : bool
+        An estimator the exchange runs (the grid PHD over the cells); the agent leaves it.
+    team_step : callable
+        An estimator's vectorised step of a whole team, equal robot by robot to each
+        robot's predict and update.
+    figures : callable
+        An estimator's or controller's own per-step figures (e.g. Sung & Tokekar's tracks).
+    view : callable
+        An exchange's view of a step for the controller (e.g. the robot's cell and bins).
+    wire : str
+        An exchange's ROS wire, ``"module:NAME"`` (:mod:`phd_swarm.nodes.wire`).
+    power_weight_guard : callable
+        A controller's bound on the power weights at the partition (Chen's guard).
+    results_revision : int or None
+        Bumped when the part's results change for the same options
+        (:mod:`phd_swarm.config.sweep_hash`); None: the module's ``RESULTS_REVISION``.
     """
 
     role: str
@@ -128,9 +161,18 @@ class Part:
     options: tuple[ParamSpec, ...] = ()
     provides: frozenset[str] = frozenset()
     requires: frozenset[str] = frozenset()
-    extras: dict[str, Any] = field(default_factory=dict)
     outputs: tuple[Output, ...] = ()
     observation: Observation = NO_OBSERVATION
+    simulate: Callable[..., Any] | None = None
+    simulate_labelled: Callable[..., Any] | None = None
+    central: Callable[[Any], Any] | None = None
+    runs_in_exchange: bool = False
+    team_step: Callable[..., Any] | None = None
+    figures: Callable[..., Any] | None = None
+    view: Callable[[Any], Any] | None = None
+    wire: str = ""
+    power_weight_guard: Callable[[Any], Any] | None = None
+    results_revision: int | None = None
 
 
 _PARTS: dict[str, dict[str, Part]] = {role: {} for role in ROLES}
@@ -145,21 +187,31 @@ def register(role: str, name: str, make: Callable[[Any, int], Any], *, descripti
              setup: Callable[..., Any] = _no_setup,
              options: Iterable[ParamSpec] = (), provides: Iterable[str] = (),
              requires: Iterable[str] = (), outputs: Iterable[Output] = (),
-             observation: Observation = NO_OBSERVATION, **extras: Any) -> Part:
+             observation: Observation = NO_OBSERVATION, **hooks: Any) -> Part:
     """Register a part under ``name`` for ``role``; returns it.
+
+    ``hooks`` are the role's hooks (:data:`HOOKS`, documented on :class:`Part`).
 
     Raises
     ------
     RegistryError
-        For an unknown role, a name that is not a lower-case identifier, or a name already
-        registered for the role by another module.
+        For an unknown role, a name that is not a lower-case identifier, a hook that is
+        not one of :data:`HOOKS` or not the role's, or a name already registered for the
+        role by another module.
     """
     if role not in ROLES:
         raise RegistryError(f"unknown role {role!r}; expected one of {list(ROLES)}")
     if not name.isidentifier() or name.lower() != name:
         raise RegistryError(f"{role} name must be a lower-case identifier, got {name!r}")
+    for hook in hooks:
+        if hook not in HOOKS:
+            raise RegistryError(f"{role} {name!r}: unknown hook {hook!r}; the hooks are "
+                                f"{sorted(HOOKS)}")
+        if role not in HOOKS[hook]:
+            raise RegistryError(f"{role} {name!r}: {hook!r} is a hook of "
+                                f"{' and '.join(HOOKS[hook])} parts, not of a {role}")
     part = Part(role, name, make, setup, description, tuple(options), frozenset(provides),
-                frozenset(requires), dict(extras), tuple(outputs), observation)
+                frozenset(requires), tuple(outputs), observation, **hooks)
     old = _PARTS[role].get(name)
     if old is not None and old.make.__module__ != make.__module__:
         raise RegistryError(f"{role} {name!r} is already registered by {old.make.__module__}")

@@ -74,7 +74,7 @@ class CentralEngine:
         self.scenario = scenario
         self.grid = scenario.grid
         team = Team.build(scenario)
-        central = team.parts["estimator"].extras.get("central")
+        central = team.parts["estimator"].central
         if central is None or "cell" not in team.parts["exchange"].provides:
             raise ValueError(f"the central engine needs an estimator with a central form and "
                              f"an exchange that partitions the map; system "
@@ -87,9 +87,9 @@ class CentralEngine:
         self.controllers = [team.make("controller", int(i)) for i in ids]
         self.rngs = [robot_generator(scenario.seed, int(i)) for i in ids]
         self.power_weights = np.zeros(len(ids))
-        hook = team.parts["controller"].extras.get("power_weight_guard")
+        hook = team.parts["controller"].power_weight_guard
         self._guard = None if hook is None else hook(team.setups["controller"])
-        self._figures = team.parts["controller"].extras.get("figures")
+        self._figures = team.parts["controller"].figures
         self._live_rows: list[int] = []
         self.cumulative = "cumulative" in team.parts["controller"].requires
         self.alpha = np.zeros(self.grid.size) if self.cumulative else None
@@ -202,7 +202,7 @@ class CentralEngine:
     def figures(self, truth: np.ndarray, ids: np.ndarray | None = None) -> dict[str, float]:
         """The controller's per-step figures (its ``figures`` hook), or none.
 
-        ``extras["figures"](controllers, truth)`` of the controller part, given the
+        ``figures(controllers, truth)`` hook of the controller part, given the
         controllers of the robots that decided at the last step (e.g. ``chen_o``'s count
         of busy robots that turned idle with a target in view,
         :func:`~phd_swarm.core.controllers.power_lloyd.switching_figures`). The central

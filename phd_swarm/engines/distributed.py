@@ -132,7 +132,7 @@ class DistributedEngine:
         self.killed: set[int] = set()
         #: Killed robots the team has not yet seen dead at the start of a step.
         self._unseen_dead: set[int] = set()
-        central = self.team.parts["estimator"].extras.get("central")
+        central = self.team.parts["estimator"].central
         if reference and central is None:
             raise ValueError(f"reference=True needs an estimator with a central form; "
                              f"{scenario.system.estimator!r} has none")
@@ -219,8 +219,8 @@ class DistributedEngine:
         self._announce_team(k)
         queue: list[Envelope] = []
         live = self.live_ids()
-        extras = self.team.parts["estimator"].extras
-        team_step = None if extras.get("runs_in_exchange") else extras.get("team_step")
+        estimator = self.team.parts["estimator"]
+        team_step = None if estimator.runs_in_exchange else estimator.team_step
         # The labels of the scans, from a sensor that identifies targets (else none).
         labels = self.world.scan_labels
         if team_step is not None:
@@ -396,8 +396,8 @@ class DistributedEngine:
         The controller part's ``figures`` hook, ``(controllers, truth)``, adds its own
         (as :meth:`phd_swarm.engines.central.CentralEngine.figures` does).
         """
-        hook = self.team.parts["estimator"].extras.get("figures")
-        own = self.team.parts["controller"].extras.get("figures")
+        hook = self.team.parts["estimator"].figures
+        own = self.team.parts["controller"].figures
         if hook is None and own is None:
             return {}
         live = self.live_ids()

@@ -70,7 +70,7 @@ class TeamReader:
         self._readers: dict[str, Callable[[Any], Any]] = {
             ESTIMATES: read_estimates,
             **{t: f.read or (lambda msg: msg) for t, f in faces.items()}}
-        self.figures = None if obs.image else parts["estimator"].extras.get("figures")
+        self.figures = None if obs.image else parts["estimator"].figures
         self._view = (load_named(obs.view, "observation view")
                       if obs.view and self.figures is not None else None)
         self.meetings = obs.meetings

@@ -89,7 +89,7 @@ def _decode_via_ros(types: Mapping[str, type], from_ros: Callable, kind: str, da
 
 
 def wire_for(exchange: Part) -> Wire:
-    """The :class:`Wire` an exchange part names (``extras["wire"] = "module:NAME"``).
+    """The :class:`Wire` an exchange part names (its ``wire`` hook, ``"module:NAME"``).
 
     The module part may be the path of a ``.py`` file (a plugin's wire), loaded as faces
     are (:func:`phd_swarm.nodes.face.load_named`).
@@ -99,7 +99,7 @@ def wire_for(exchange: Part) -> Wire:
     ValueError
         If the part names none (it cannot run on ROS) or the name does not resolve.
     """
-    ref = exchange.extras.get("wire")
+    ref = exchange.wire or None
     if not isinstance(ref, str) or ":" not in ref:
         raise ValueError(f"exchange {exchange.name!r} has no ROS wire format "
                          f"(register it with wire='module:NAME')")

@@ -93,9 +93,9 @@ class World:
         self.targets: Targets = make_targets(self._target_rng, scenario)
         self.step_index = 0
         sensor = scenario.system.parts()["sensor"]
-        self._simulate = sensor.extras["simulate"]
+        self._simulate = sensor.simulate
         # A sensor that identifies targets is handed their ids (disk_labelled).
-        self._simulate_labelled = sensor.extras.get("simulate_labelled")
+        self._simulate_labelled = sensor.simulate_labelled
         #: Robot id -> the labels of its last scan, (M,) int64, 0 for clutter; filled only
         #: by a sensor that identifies targets (:mod:`phd_swarm.core.sensors.disk_labelled`).
         self.scan_labels: dict[int, np.ndarray] = {}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 import sys
 from pathlib import Path
@@ -179,11 +180,15 @@ def test_a_results_revision_above_one_enters_the_hash(probe, monkeypatch):
     second = _probe_hash()
     assert second != first
     # ... or by the part itself, which wins.
-    monkeypatch.setitem(probe.extras, "results_revision", 1)
+    def declare(n: int) -> None:
+        monkeypatch.setitem(registry._PARTS["controller"], "probe",
+                            dataclasses.replace(probe, results_revision=n))
+
+    declare(1)
     assert _probe_hash() == first
-    monkeypatch.setitem(probe.extras, "results_revision", 3)
+    declare(3)
     assert _probe_hash() not in (first, second)
-    monkeypatch.setitem(probe.extras, "results_revision", 0)
+    declare(0)
     with pytest.raises(ValueError, match="system.controller: probe declares results "
                                          "revision 0; expected an integer >= 1"):
         _probe_hash()

@@ -15,7 +15,7 @@ def test_the_built_in_parts_are_registered():
     assert {"chen_o", "chen_p", "phd", "uniform"} <= set(names("controller"))
     assert "voronoi_phd" in names("exchange") and "grid_phd" in names("estimator")
     assert "disk" in names("sensor")
-    assert lookup("exchange", "voronoi_phd").extras["wire"].endswith(":WIRE")
+    assert lookup("exchange", "voronoi_phd").wire.endswith(":WIRE")
 
 
 def test_the_table_of_built_in_parts_is_what_their_modules_register():
@@ -97,3 +97,21 @@ def test_a_plugin_that_cannot_load_is_named(tmp_path):
     broken.write_text("raise RuntimeError('boom')\n")
     with pytest.raises(RegistryError, match="RuntimeError: boom"):
         load_plugins([str(broken)])
+
+
+def test_hooks_are_typed_and_belong_to_their_role(monkeypatch):
+    from phd_swarm.core import registry
+
+    monkeypatch.setitem(registry._PARTS, "controller", dict(registry._PARTS["controller"]))
+    with pytest.raises(registry.RegistryError, match="unknown hook 'figurez'"):
+        registry.register("controller", "hook_probe", lambda s, r: None, description="x",
+                          figurez=lambda *a: {})
+    with pytest.raises(registry.RegistryError, match="'wire' is a hook of exchange parts, "
+                                                     "not of a controller"):
+        registry.register("controller", "hook_probe", lambda s, r: None, description="x",
+                          wire="m:W")
+    part = registry.register("controller", "hook_probe", lambda s, r: None,
+                             description="x", figures=len)
+    assert part.figures is len and part.central is None and part.wire == ""
+    assert registry.lookup("estimator", "grid_phd").runs_in_exchange
+    assert registry.lookup("sensor", "disk").simulate is not None

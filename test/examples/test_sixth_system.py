@@ -61,7 +61,7 @@ def test_the_parts_register_and_fit_and_refuse_an_estimator_they_cannot_share(si
                                     "merge_radius": 1.5}
     parts = system.parts()
     assert [o.topic for o in system_outputs(parts)] == ["detections"]
-    assert parts["exchange"].extras["wire"] == f"{FACES}:WIRE"
+    assert parts["exchange"].wire == f"{FACES}:WIRE"
     with pytest.raises(ValueError, match=r"beacon needs \['shared_estimates'\]"):
         SystemConfig(exchange="beacon", controller="waypoint")  # Dames' grid PHD
     with pytest.raises(ValueError, match="memory_steps"):

@@ -58,6 +58,6 @@ def test_an_exchange_without_a_wire_cannot_run_on_ros():
     with pytest.raises(ValueError, match="no ROS wire format"):
         wire_for(part)
     bad = Part("exchange", "badwire", lambda s, r: None, lambda *a, **k: None, "test",
-               extras={"wire": "phd_swarm.nodes.convert:no_such_wire"})
+               wire="phd_swarm.nodes.convert:no_such_wire")
     with pytest.raises(ValueError, match="cannot be loaded"):
         wire_for(bad)

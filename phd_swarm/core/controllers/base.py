@@ -42,7 +42,7 @@ class PowerWeightGuard:
     """A bound on the power weights, applied where the team's partition is computed.
 
     A controller part whose options need one declares the hook
-    ``extras["power_weight_guard"](setup) -> PowerWeightGuard | None`` (None: no bound).
+    the part's ``power_weight_guard(setup) -> PowerWeightGuard | None`` hook (None: no bound).
     The central engine applies ``bound`` to the robots' weights at their positions before
     each partition; a robot of the distributed protocol knows only its contacts' states,
     not the positions the bound needs, so :class:`~phd_swarm.core.agent.Agent` refuses a

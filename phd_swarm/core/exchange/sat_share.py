@@ -11,7 +11,7 @@ a joint search plan"), so a pair exchanges only if the rule allows it on both si
 sender leaves its map out for an agent of its plan, the receiver ignores the map of an
 agent of its own plan. Every map taken is max-merged into the estimator's
 (:meth:`~phd_swarm.core.estimators.papaioannou.PapaioannouEstimator.merge_search`); the
-controller reads what came in through :class:`SatView` (``extras["view"]``) and builds the
+controller reads what came in through :class:`SatView` (its ``view`` hook) and builds the
 joint plan of Alg. 1 with the agents whose maps it received.
 
 The step machinery (one message per contact, merged in id order once all are in, a timeout

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -197,7 +198,9 @@ def test_the_labelled_engine_run_is_the_same_with_and_without_the_team_step(monk
                 for e in (engine.agents[r].estimator for r in sorted(engine.agents))]
 
     with_team = run()
-    monkeypatch.delitem(registry.lookup("estimator", "shirsat_gmphd").extras, "team_step")
+    part = registry.lookup("estimator", "shirsat_gmphd")
+    monkeypatch.setitem(registry._PARTS["estimator"], "shirsat_gmphd",
+                        dataclasses.replace(part, team_step=None))
     for a, b in zip(with_team, run(), strict=True):
         for x, y in zip(a, b, strict=True):
             np.testing.assert_array_equal(x, y)
