@@ -79,8 +79,8 @@ def declare_scenario(node: Node) -> Scenario:
     """Declare the read-only ``scenario.*`` parameters and build the scenario from them."""
     where = f"node {node.get_fully_qualified_name()} parameters scenario"
     desc = ParameterDescriptor(read_only=True, description=(
-        "Scenario preset (dames_static, dames_moving, chen_clustered); the other scenario.* "
-        "parameters override it (docs/parameters.md)."))
+        f"Scenario preset ({', '.join(PRESETS)}); the other scenario.* parameters override "
+        "it (docs/parameters.md)."))
     preset = node.declare_parameter("scenario.preset", "dames_static", desc).value
     try:
         preset = preset_name({"preset": preset})

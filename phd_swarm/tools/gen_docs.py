@@ -84,8 +84,7 @@ DESCRIPTIONS: dict[str, str] = {
 
 #: Meaning and unit of every flattened scenario key (``scenario.<key>``), in display order.
 SCENARIO_MEANINGS: dict[str, str] = {
-    "preset": "Preset that the other keys override: dames_static, dames_moving, "
-              "chen_clustered, sung_tokekar or shirsat_berman.",
+    "preset": f"Preset that the other keys override: {', '.join(PRESETS)}.",
     "name": "Label of the run (default: the preset's name).",
     "env.xmin": "Map E: smallest x [m].",
     "env.ymin": "Map E: smallest y [m].",
@@ -119,7 +118,8 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "robot_start_grid": "If set, robots start on random nodes of a grid of this spacing [m] "
                         "inside robot_start_box (Shirsat & Berman); unset: uniform in the box.",
     "targets.kind": "True population: static (Dames IV-A), dames_walk (Dames IV-B), "
-                    "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4).",
+                    "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4), ncv "
+                    "(Papaioannou et al.: nearly constant velocity, births and deaths).",
     "targets.count": "static: targets drawn (those outside E are dropped); dames_walk: "
                      "initial number; clustered_walk: sum of per_cluster; turning_walk: "
                      "number; ncv: targets over the run (born at their birth times).",

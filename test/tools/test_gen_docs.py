@@ -115,3 +115,15 @@ def test_a_plugin_loaded_in_this_process_stays_out_of_the_docs(tmp_path):
         assert "docs_probe" not in gen_docs.render_parameters()
     finally:
         registry._PARTS["controller"].pop("docs_probe")
+
+
+def test_every_preset_and_target_kind_is_named_where_users_read_them():
+    from phd_swarm.sim.presets import PRESETS
+    from phd_swarm.sim.scenario import TARGET_KINDS
+
+    params = gen_docs.render_parameters()
+    for name in PRESETS:
+        assert name in gen_docs.SCENARIO_MEANINGS["preset"], name
+    for kind in TARGET_KINDS:
+        assert kind in gen_docs.SCENARIO_MEANINGS["targets.kind"], kind
+    assert all(name in params for name in PRESETS)
