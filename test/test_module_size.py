@@ -17,8 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "phd_swarm"
 LIMIT = 600
 
 #: Modules still over the limit (issue 35).
-PENDING = {"core/renyi_tracking.py", "sim/targets.py",
-           "tools/gen_docs.py"}
+PENDING = {"core/renyi_tracking.py", "sim/targets.py"}
 
 MODULES = sorted(PACKAGE.rglob("*.py"))
 

@@ -95,10 +95,14 @@ def test_check_finds_stale_and_missing_files(tmp_path):
 
 
 def test_a_missing_description_fails_the_render(monkeypatch):
-    monkeypatch.delitem(gen_docs.DESCRIPTIONS, topics.CLOCK)
+    # Copies without the key (deleting and restoring an item would move it to the end of
+    # the dict, and so its row in the docs of every later render in this process).
+    monkeypatch.setattr(gen_docs, "DESCRIPTIONS", {
+        k: v for k, v in gen_docs.DESCRIPTIONS.items() if k != topics.CLOCK})
     with pytest.raises(ValueError, match="/clock"):
         gen_docs.render_topics()
-    monkeypatch.delitem(gen_docs.SCENARIO_MEANINGS, "dt")
+    monkeypatch.setattr(gen_docs, "SCENARIO_MEANINGS", {
+        k: v for k, v in gen_docs.SCENARIO_MEANINGS.items() if k != "dt"})
     with pytest.raises(ValueError, match="'dt'"):
         gen_docs.render_parameters()
 
