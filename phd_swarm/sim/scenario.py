@@ -96,7 +96,7 @@ class TargetConfig:
     step_sd : float
         ``clustered_walk``: per-axis s.d. of the walk's velocity [m/s]; the step is
         ``N(0, (step_sd dt)^2 I)`` (default 1 = max_speed / 3, see
-        :class:`~phd_swarm.sim.targets.ClusteredWalkers`).
+        :class:`~phd_swarm.sim.walkers.ClusteredWalkers`).
     max_speed : float
         ``clustered_walk``: speed cap [m/s] (Chen: 3).
     turn_every : float

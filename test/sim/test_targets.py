@@ -10,15 +10,14 @@ from phd_swarm.core.models import BoundaryBirth
 from phd_swarm.sim.presets import chen_clustered, dames_moving, dames_static
 from phd_swarm.sim.targets import (
     BIRTH_HEADINGS,
-    ClusteredWalkers,
     DamesWalkers,
     StaticTargets,
     boundary_ring_area,
     make_targets,
-    reflect_into,
     sample_boundary_ring,
     substeps_per_step,
 )
+from phd_swarm.sim.walkers import ClusteredWalkers, reflect_into
 
 E = Environment(0.0, 0.0, 100.0, 100.0)
 DRAW = (-10.0, -10.0, 110.0, 110.0)
@@ -305,7 +304,7 @@ def test_make_targets_without_birth():
 # ------------------------------------------------------------------ turning walkers
 def _turning(n=50, speed=0.05, turn_every=400.0, seed=0):
     from phd_swarm.core.grid import Environment
-    from phd_swarm.sim.targets import TurningWalkers
+    from phd_swarm.sim.walkers import TurningWalkers
     env = Environment(0.0, 0.0, 150.0, 150.0)
     return env, TurningWalkers.sample(np.random.default_rng(seed), env, n, None, speed,
                                       turn_every)
