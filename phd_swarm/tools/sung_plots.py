@@ -12,17 +12,15 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from phd_swarm.tools.sung_sweep import MethodRuns, Sweep
 from phd_swarm.tools.sweep_plots import COLOURS, legend_columns
 from phd_swarm.tools.tables import figure_grid, save_png
-
-if TYPE_CHECKING:
-    from phd_swarm.tools.sung_tables import MethodRuns, Sweep
 
 #: Band of the time plots: these percentiles over the seeds at each step.
 BAND = (10.0, 90.0)

@@ -62,13 +62,13 @@ import json
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from phd_swarm.tools.sung_plots import plot_boxes, plot_time
+from phd_swarm.tools.sung_sweep import MethodRuns, Sweep
 from phd_swarm.tools.sweep_results import load_series
 from phd_swarm.tools.tables import TablesError, over_seeds, read_results
 
@@ -258,39 +258,6 @@ def run_values(series: dict[str, np.ndarray]) -> dict[str, float]:
 
 
 # ---------------------------------------------------------------------------- reading
-@dataclass
-class MethodRuns:
-    """The finished runs of one method of a sweep.
-
-    Attributes
-    ----------
-    trials, seeds : list
-        Trial keys and seeds, sorted by seed.
-    values : list of dict
-        :func:`run_values` of each run.
-    series : list of dict
-        The :data:`PLOTTED` series of each run, every ``stride``-th step.
-    steps : list of int
-        Number of steps of each run.
-    """
-
-    trials: list[str] = field(default_factory=list)
-    seeds: list[int] = field(default_factory=list)
-    values: list[dict[str, float]] = field(default_factory=list)
-    series: list[dict[str, np.ndarray]] = field(default_factory=list)
-    steps: list[int] = field(default_factory=list)
-
-
-@dataclass
-class Sweep:
-    """A sweep directory read by :func:`load_sweep`."""
-
-    path: Path
-    name: str
-    figure: str
-    methods: dict[str, MethodRuns]
-
-
 def _method_order(path: Path, rows: Sequence[dict[str, str]]) -> list[str]:
     order: list[str] = []
     spec = path / "spec.json"
