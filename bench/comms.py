@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import presets as sc
 from phd_swarm.sim.scenario import Scenario

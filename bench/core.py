@@ -24,10 +24,10 @@ import numpy as np
 from results_io import machine_meta, write_results
 
 from phd_swarm.core.estimators.central_phd import CentralPhdFilter
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.ownership import bin_owners
+from phd_swarm.core.geometry.partition import partition
 from phd_swarm.core.ospa import ospa
-from phd_swarm.core.ownership import bin_owners
-from phd_swarm.core.partition import partition
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.disk import simulate_scan
 from phd_swarm.sim.presets import PRESETS

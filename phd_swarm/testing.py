@@ -156,7 +156,7 @@ class ChildProcesses:
 
 def small_static_scenario(robots: int = 5, steps: int = 64, seed: int = 7) -> Any:
     """A 40 x 40 m Dames static scenario (12 targets) where 5 robots find most in 32 s."""
-    from phd_swarm.core.grid import Environment
+    from phd_swarm.core.geometry.grid import Environment
     from phd_swarm.sim.presets import dames_static
     from phd_swarm.sim.scenario import TargetConfig
 

@@ -43,7 +43,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from .grid import Grid
+from .geometry.grid import Grid
 
 MODES = ("rate", "literal", "laplace")
 
@@ -240,7 +240,7 @@ def nearest_robot_cap(positions: np.ndarray, rho: np.ndarray,
     2. With m > 0, W_r holds every x of E with ||x - q_r|| < min(m, D_r / 2), and owns it
        outright (no tie). W_r is cut by the half-planes (x - q_r) . u_k <= h_k,
        u_k = (q_k - q_r) / D, h_k = (D^2 + rho'_r^2 - rho'_k^2) / (2 D)
-       (:func:`phd_swarm.core.partition.cells`). g is non-decreasing, so
+       (:func:`phd_swarm.core.geometry.partition.cells`). g is non-decreasing, so
        rho'_k^2 <= g(D)^2. If D >= 2m, h_k >= (D^2 - (D^2 - 2 m D)) / (2 D) = m; if D < 2m,
        then D_k <= D < 2m, g(D_k) = 0, rho'_k = 0 and h_k >= D / 2 >= D_r / 2. So
        h_k >= min(m, D_r / 2) > (x - q_r) . u_k for every k. With m = the bin side, a
@@ -250,7 +250,7 @@ def nearest_robot_cap(positions: np.ndarray, rho: np.ndarray,
        thinner than a bin.
 
     Coincident robots (D_k = 0) get rho' = 0, and the lower index takes the shared point
-    (:func:`~phd_swarm.core.ownership.assign_bins`). A robot alone keeps its rho.
+    (:func:`~phd_swarm.core.geometry.ownership.assign_bins`). A robot alone keeps its rho.
 
     Parameters
     ----------

@@ -4,7 +4,7 @@ Dames (2020), Sec. IV: "we converted the PHD to an image and used the LocalMaxim
 from the MATLAB Computer Vision toolbox with a neighborhood size of 3 and a threshold of
 0.05. The resulting maxima were used as the best guess of the target set." The image is
 the per-bin weight w_j, an expected number of targets per bin (a mass, dimensionless),
-laid out as in :mod:`phd_swarm.core.grid` (shape ``(ny, nx)``, flat index ``iy*nx + ix``).
+laid out as in :mod:`phd_swarm.core.geometry.grid` (shape ``(ny, nx)``, flat index ``iy*nx + ix``).
 
 Differences from MATLAB's ``vision.LocalMaximaFinder``, which repeatedly takes the global
 maximum that "matches or exceeds" the threshold and zeroes its neighbourhood, up to a
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from .grid import Grid
+from .geometry.grid import Grid
 
 _EIGHT_CONNECTED = np.ones((3, 3), dtype=bool)
 

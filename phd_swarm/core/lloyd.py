@@ -2,7 +2,8 @@
 
 Each robot r moves towards the weighted centroid of its cell (Dames 2020 eq. 8, Chen et al.
 eq. 2), the integral being replaced by the sum over the bins it owns (see
-:func:`phd_swarm.core.ownership.assign_bins`), and advances at most ``d_step`` per time step
+:func:`phd_swarm.core.geometry.ownership.assign_bins`), and advances at most ``d_step`` per
+time step
 along the straight line to it (Chen eq. 3).
 
 The weighting function phi is one of (Dames Sec. II-C and IV, Chen Alg. 1):
@@ -18,8 +19,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .grid import Grid
-from .polygons import polygon_area, polygon_centroid
+from .geometry.grid import Grid
+from .geometry.polygons import polygon_area, polygon_centroid
 
 
 def _as_point(name: str, value: np.ndarray) -> np.ndarray:

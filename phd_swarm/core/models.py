@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import ndtr
 
-from .grid import Grid
+from .geometry.grid import Grid
 
 
 def _check_positive(name: str, value: float, allow_zero: bool = False) -> None:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-from .points import as_points
+from .geometry.points import as_points
 
 
 @dataclass(frozen=True)

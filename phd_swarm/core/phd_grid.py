@@ -1,7 +1,7 @@
 """The grid ("bin") PHD filter of Dames (2020) as functions on (flat indices, weights).
 
 Every function works on an arbitrary subset of bins given as flat indices (``iy * nx + ix``,
-see :mod:`phd_swarm.core.grid`) and the matching weights, so that the centralised filter
+see :mod:`phd_swarm.core.geometry.grid`) and the matching weights, so that the centralised filter
 (all bins, :mod:`phd_swarm.core.estimators.central_phd`) and the distributed filter (each
 robot holds the bins of its Voronoi cell, Dames Sec. III) share one implementation.
 
@@ -32,7 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
-from .grid import Grid
+from .geometry.grid import Grid
 from .models import PhdModels
 from .scan import Scan
 

@@ -50,7 +50,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .points import as_points
+from .geometry.points import as_points
 
 __all__ = ["as_labels", "as_points", "extend", "extend_by_label", "union", "union_by_label"]
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from phd_swarm.core.extraction import ExtractionConfig, expected_cardinality, extract_targets
-from phd_swarm.core.grid import Grid
+from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.ospa import ospa_components
 
 

@@ -20,7 +20,7 @@ boundary, max(|x - s_x|, |y - s_y|) = a / 2; the region is the set where the max
 <= a / 2). A virtual target is inside S_a(s) when its node centre is (IV-C's indicator on
 the virtual target), so a region counts as searched only through its centre.
 
-Index conventions are those of :class:`phd_swarm.core.grid.Grid`: node ``(iy, ix)`` has
+Index conventions are those of :class:`phd_swarm.core.geometry.grid.Grid`: node ``(iy, ix)`` has
 flat index ``iy * nx + ix`` (x fastest) and centre ``(xmin + (ix + 0.5) node_size,
 ymin + (iy + 0.5) node_size)`` [m].
 
@@ -36,7 +36,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .grid import Environment, Grid
+from .geometry.grid import Environment, Grid
 
 __all__ = ["EDGE_TOLERANCE", "DEFAULT_DECAY", "SearchGrid", "initial_values", "predict",
            "update", "check_values", "max_merge", "unvisited", "searched_fraction"]
@@ -104,7 +104,7 @@ class SearchGrid:
 
     @cached_property
     def grid(self) -> Grid:
-        """The same nodes as a :class:`~phd_swarm.core.grid.Grid` of bins."""
+        """The same nodes as a :class:`~phd_swarm.core.geometry.grid.Grid` of bins."""
         return Grid(Environment(self.xmin, self.ymin, self.xmax, self.ymax), self.node_size)
 
     @property

@@ -18,7 +18,7 @@ One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
 
 1. the world gives each live robot its measurement set Z^k at its position q^k;
 2. the cells of q^k with the power weights of the previous decisions partition the bins
-   (ties to the lower robot id, as in :func:`~phd_swarm.core.ownership.assign_bins`); a
+   (ties to the lower robot id, as in :func:`~phd_swarm.core.geometry.ownership.assign_bins`); a
    controller that declares a bound on the weights at the partition
    (:class:`~phd_swarm.core.controllers.base.PowerWeightGuard`, e.g. ``chen_o`` with
    ``rho_cap: nearest_robot``) has it applied to them first, at q^k;
@@ -45,8 +45,8 @@ from phd_swarm.core import phd_grid
 from phd_swarm.core.agent import Team, robot_generator
 from phd_swarm.core.controllers.base import CellDensity, Knowledge
 from phd_swarm.core.cumulative import observe_scans
-from phd_swarm.core.ownership import bin_owners
-from phd_swarm.core.partition import cell_of
+from phd_swarm.core.geometry.ownership import bin_owners
+from phd_swarm.core.geometry.partition import cell_of
 from phd_swarm.core.scan import Scan
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.world import World

@@ -28,7 +28,7 @@ from geometry_msgs.msg import Point, Pose, PoseStamped
 from rclpy.serialization import serialize_message
 from std_msgs.msg import Header
 
-from phd_swarm.core.grid import Grid
+from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import cdr
 from phd_swarm_msgs.msg import DensityGrid, MeasurementSet, TargetSet

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from phd_swarm.core.grid import Grid
+from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.outputs import system_outputs
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.face import load_face, load_named

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.sim.ncv_targets import NcvTargets, ncv_matrices
 
 if TYPE_CHECKING:

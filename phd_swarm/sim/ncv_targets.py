@@ -23,7 +23,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 
 __all__ = ["NOISE_FORMS", "SPAWNS", "NcvTargets", "ncv_matrices"]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from phd_swarm.core import models as core_models
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.models import PhdModels
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim.scenario import BOTTOM_CENTRE_BOX, MAP_100, Scenario, TargetConfig

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.extraction import ExtractionConfig
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.grid_graph import lattice_count, lattice_range
 from phd_swarm.core.models import PhdModels
 from phd_swarm.core.params import (

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
 from phd_swarm.sim.ncv_paths import NcvPaths, make_ncv_targets
 from phd_swarm.sim.ncv_targets import NcvTargets

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.sim.target_checks import check_box, check_count, check_nonneg, frozen
 
 

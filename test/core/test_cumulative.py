@@ -15,10 +15,10 @@ from phd_swarm.core.cumulative import (
     observe_scans,
     power_weight,
 )
-from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.ownership import bin_owners
-from phd_swarm.core.partition import cells
-from phd_swarm.core.polygons import points_in_polygon, polygon_area
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.ownership import bin_owners
+from phd_swarm.core.geometry.partition import cells
+from phd_swarm.core.geometry.polygons import points_in_polygon, polygon_area
 
 
 def fresh(size: int) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from phd_swarm.core.extraction import ExtractionConfig, expected_cardinality, extract_targets
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 
 
 @pytest.fixture

@@ -7,7 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.ownership import bin_owners
+from phd_swarm.core.geometry.partition import partition
 from phd_swarm.core.lloyd import (
     centroid_goal,
     control_step,
@@ -15,8 +17,6 @@ from phd_swarm.core.lloyd import (
     step_length,
     weighted_centroid,
 )
-from phd_swarm.core.ownership import bin_owners
-from phd_swarm.core.partition import partition
 
 GRID = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)
 SQUARE = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.models import (
     DiskDetection,
     GaussianMeasurement,

@@ -11,7 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from phd_swarm.core import phd_grid
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.polygons import positions_in_sorted
 from phd_swarm.core.models import (
     DiskDetection,
     RandomWalkMotion,
@@ -19,7 +20,6 @@ from phd_swarm.core.models import (
     dames_moving,
     dames_static,
 )
-from phd_swarm.core.polygons import positions_in_sorted
 from phd_swarm.core.scan import Scan
 
 GRID = Grid(Environment(0.0, 0.0, 20.0, 16.0), 0.5)  # nx = 40, ny = 32

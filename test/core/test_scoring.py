@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core.extraction import ExtractionConfig
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.scoring import score_step
 
 

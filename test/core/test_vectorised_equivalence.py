@@ -11,14 +11,14 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import models as core_models
-from phd_swarm.core import ownership
 from phd_swarm.core.cumulative import cumulative_update_counts
 from phd_swarm.core.exchange.voronoi_phd import context as context_mod
 from phd_swarm.core.exchange.voronoi_phd.participant import FilterContext
-from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.ownership import assign_bins, bins_owned_in_box
-from phd_swarm.core.partition import cells
-from phd_swarm.core.polygons import (
+from phd_swarm.core.geometry import ownership
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.ownership import assign_bins, bins_owned_in_box
+from phd_swarm.core.geometry.partition import cells
+from phd_swarm.core.geometry.polygons import (
     points_in_any_polygon,
     points_in_polygon,
     points_in_polygons,

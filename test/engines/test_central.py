@@ -7,9 +7,9 @@ import pytest
 
 from phd_swarm.core import phd_grid
 from phd_swarm.core.cumulative import nearest_robot_cap
-from phd_swarm.core.ownership import bin_owners
-from phd_swarm.core.partition import cells
-from phd_swarm.core.polygons import points_in_polygon
+from phd_swarm.core.geometry.ownership import bin_owners
+from phd_swarm.core.geometry.partition import cells
+from phd_swarm.core.geometry.polygons import points_in_polygon
 from phd_swarm.engines.central import CentralEngine
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim import presets as sc

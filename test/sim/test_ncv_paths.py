@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.config.sweep_spec import config_hash
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.sim.lifetimes import alive_steps, in_area_lifetimes
 from phd_swarm.sim.ncv_paths import NcvPaths, truncated_geometric_p
 from phd_swarm.sim.ncv_targets import NcvTargets

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.sim.ncv_targets import NcvTargets, ncv_matrices
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)

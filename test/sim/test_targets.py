@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.models import BoundaryBirth
 from phd_swarm.sim.presets import chen_clustered, dames_moving, dames_static
 from phd_swarm.sim.targets import (
@@ -303,7 +303,7 @@ def test_make_targets_without_birth():
 
 # ------------------------------------------------------------------ turning walkers
 def _turning(n=50, speed=0.05, turn_every=400.0, seed=0):
-    from phd_swarm.core.grid import Environment
+    from phd_swarm.core.geometry.grid import Environment
     from phd_swarm.sim.walkers import TurningWalkers
     env = Environment(0.0, 0.0, 150.0, 150.0)
     return env, TurningWalkers.sample(np.random.default_rng(seed), env, n, None, speed,

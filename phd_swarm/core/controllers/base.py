@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..grid import Grid
+from ..geometry.grid import Grid
 
 
 @dataclass(frozen=True)

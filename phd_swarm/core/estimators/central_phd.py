@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import phd_grid
 from ..extraction import ExtractionConfig, extract_targets
-from ..grid import Grid
+from ..geometry.grid import Grid
 from ..models import PhdModels
 from ..scan import Scan
 from .base import Estimator
@@ -23,8 +23,8 @@ class CentralPhdFilter(Estimator):
     """Grid PHD filter over the whole environment (Dames 2020 eq. 3-6).
 
     The state is one mass per bin (expected number of targets in the bin), held as an image
-    of shape ``(ny, nx)`` (see :mod:`phd_swarm.core.grid` for the index convention), starting
-    at ``models.initial_density * bin_area`` everywhere.
+    of shape ``(ny, nx)`` (see :mod:`phd_swarm.core.geometry.grid` for the index
+    convention), starting at ``models.initial_density * bin_area`` everywhere.
 
     Survival and birth images and the motion kernel are computed once. An update only
     touches the bins of the sensor's field-of-view disk, so its cost does not grow with the

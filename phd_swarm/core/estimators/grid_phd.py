@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import registry
 from ..extraction import ExtractionConfig, expected_cardinality, extract_targets
-from ..grid import Environment, Grid
+from ..geometry.grid import Environment, Grid
 from ..outputs import Observation, Output
 from ..params import ParamSpec
 from .central_phd import CentralPhdFilter

@@ -24,7 +24,7 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
     TransferKind,
     TransferMsg,
 )
-from phd_swarm.core.grid import Grid
+from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import cdr
 from phd_swarm.nodes.convert import (

@@ -19,7 +19,7 @@ from phd_swarm.core.exchange.voronoi_phd.messages import (
     TransferMsg,
     sender_of,
 )
-from phd_swarm.core.grid import Grid
+from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert
 from phd_swarm.nodes.face import Face, Step

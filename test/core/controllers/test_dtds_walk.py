@@ -10,7 +10,7 @@ import pytest
 from phd_swarm.core import registry
 from phd_swarm.core.controllers.base import Controller, Knowledge
 from phd_swarm.core.controllers.dtds_walk import DtdsWalk, setup
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.grid_graph import GridGraph
 from phd_swarm.core.lloyd import next_position
 from phd_swarm.core.system import SystemConfig

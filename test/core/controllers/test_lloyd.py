@@ -6,7 +6,7 @@ import numpy as np
 
 from phd_swarm.core.controllers.base import CellDensity, Knowledge
 from phd_swarm.core.controllers.lloyd import LloydController
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.registry import lookup
 
 GRID = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)

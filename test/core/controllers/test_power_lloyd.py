@@ -14,7 +14,7 @@ from phd_swarm.core.controllers.power_lloyd import (
     setup,
     switching_figures,
 )
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.system import SystemConfig
 from phd_swarm.sim import presets as sc
 

@@ -18,7 +18,7 @@ from phd_swarm.core.controllers.sung_planners import (
     setup,
 )
 from phd_swarm.core.estimators.gm_phd import GaussianMixture
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.lloyd import next_position
 from phd_swarm.core.system import SystemConfig
 

@@ -7,7 +7,7 @@ import pytest
 
 from phd_swarm.core import phd_grid
 from phd_swarm.core.estimators.central_phd import CentralPhdFilter
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.models import dames_moving, dames_static
 from phd_swarm.core.scan import Scan
 

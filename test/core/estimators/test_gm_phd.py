@@ -368,7 +368,7 @@ def test_gm_phd_agrees_with_the_grid_phd_on_a_linear_gaussian_case():
     to that error: every weight, mean and covariance of the GM update is checked.
     """
     from phd_swarm.core.estimators.central_phd import CentralPhdFilter
-    from phd_swarm.core.grid import Environment, Grid
+    from phd_swarm.core.geometry.grid import Environment, Grid
     from phd_swarm.core.models import (
         DiskDetection,
         GaussianMeasurement,

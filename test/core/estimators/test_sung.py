@@ -10,7 +10,7 @@ from phd_swarm.core.estimators.detection import DiskFov
 from phd_swarm.core.estimators.gm_phd import GaussianMixture
 from phd_swarm.core.estimators.sung import SungEstimator, initial_belief
 from phd_swarm.core.estimators.sung_figures import mahalanobis_to_tracks, step_figures
-from phd_swarm.core.grid import Environment
+from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.scan import Scan
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim.presets import sung_tokekar

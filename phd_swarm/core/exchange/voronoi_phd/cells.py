@@ -1,8 +1,9 @@
 """The cells of one step as one robot sees them (Dames 2020 Alg. 1 lines 2-3).
 
 :class:`LocalPartition` is the partition of the robot and the contacts whose states arrived
-(the own power/Voronoi cell and who owns a bin, :func:`~phd_swarm.core.ownership.assign_bins`:
-lowest power distance, lowest id on ties, so all robots agree without a global view).
+(the own power/Voronoi cell and who owns a bin,
+:func:`~phd_swarm.core.geometry.ownership.assign_bins`: lowest power distance, lowest id
+on ties, so all robots agree without a global view).
 :class:`NeighbourCells` holds the cells the contacts sent, with their bounding boxes and
 radii, for the questions later phases ask of them (whose cell is within reach of phantom
 mass, which cell holds a field-of-view bin).
@@ -16,10 +17,10 @@ from functools import cached_property
 
 import numpy as np
 
-from ...grid import Environment
-from ...ownership import assign_checked, check_generators
-from ...partition import cell_of
-from ...polygons import points_in_any_polygon, points_in_polygon
+from ...geometry.grid import Environment
+from ...geometry.ownership import assign_checked, check_generators
+from ...geometry.partition import cell_of
+from ...geometry.polygons import points_in_any_polygon, points_in_polygon
 from .messages import CellMsg, StateMsg, stacked
 
 
@@ -75,7 +76,7 @@ class LocalPartition:
     def owners(self, points: np.ndarray) -> np.ndarray:
         """Ids of the robots owning the bins with centres ``points`` (K, 2), int64 (K,).
 
-        :func:`~phd_swarm.core.ownership.assign_bins` of the bin centres (finite by
+        :func:`~phd_swarm.core.geometry.ownership.assign_bins` of the bin centres (finite by
         construction), with the generators checked once per step.
         """
         q, rho2 = self._generators

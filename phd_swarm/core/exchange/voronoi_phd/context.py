@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ...grid import Grid
+from ...geometry.grid import Grid
 from ...models import PhdModels
 from ..base import ENGINE_TIMEOUT_TICKS
 

@@ -26,9 +26,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ...grid import Grid
-from ...ownership import bins_owned_in_box
-from ...polygons import isin_sorted
+from ...geometry.grid import Grid
+from ...geometry.ownership import bins_owned_in_box
+from ...geometry.polygons import isin_sorted
 from ..base import Envelope
 from .cells import LocalPartition
 from .context import FilterContext

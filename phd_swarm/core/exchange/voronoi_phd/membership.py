@@ -31,8 +31,8 @@ from itertools import chain
 
 import numpy as np
 
-from ...partition import cell_of, partition
-from ...polygons import cell_radius, isin_sorted
+from ...geometry.partition import cell_of, partition
+from ...geometry.polygons import cell_radius, isin_sorted
 from .cells import LocalPartition, NeighbourCells
 from .context import FilterContext
 from .messages import CellMsg, Message, StateMsg, TransferMsg, stacked

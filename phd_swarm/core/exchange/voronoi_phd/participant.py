@@ -20,10 +20,10 @@ robots. One step ``t`` runs these phases:
 
 Per-bin state besides the PHD mass (Chen's cumulative alpha and n) is a layer that travels
 with the bins (:mod:`.layers`). Ownership of a bin is the canonical rule of
-:func:`phd_swarm.core.ownership.assign_bins` (lowest power distance, lowest id on ties) over
-the robot and its contacts, so all robots agree on it without a global view. Every sum that
-combines several robots' numbers is taken in robot-id order, so the result does not depend
-on the order messages arrive in.
+:func:`phd_swarm.core.geometry.ownership.assign_bins` (lowest power distance, lowest id on
+ties) over the robot and its contacts, so all robots agree on it without a global view.
+Every sum that combines several robots' numbers is taken in robot-id order, so the result
+does not depend on the order messages arrive in.
 
 Failures and lost messages: every wait counts :meth:`tick` s; a waiting robot sends
 keep-alives and declares silent peers dead (:mod:`.liveness`). A keep-alive is also a

@@ -6,7 +6,7 @@ import numpy as np
 
 from phd_swarm.core.exchange.voronoi_phd.context import FilterContext
 from phd_swarm.core.exchange.voronoi_phd.layers import BinLayer, CumulativeLayer, layer_for
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
 
 GRID = Grid(Environment(0.0, 0.0, 10.0, 10.0), 1.0)

@@ -21,7 +21,7 @@ from phd_swarm.core.exchange.voronoi_phd.participant import (
     Phase,
     ProtocolError,
 )
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.models import PhdModels
 from phd_swarm.core.scan import Scan
 

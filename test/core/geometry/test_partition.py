@@ -1,4 +1,4 @@
-"""Tests of phd_swarm.core.partition: Voronoi / power cells, bin ownership, neighbours."""
+"""Tests of phd_swarm.core.geometry.partition: Voronoi / power cells, bin ownership, neighbours."""
 
 from __future__ import annotations
 
@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from phd_swarm.core import partition as part
-from phd_swarm.core.grid import Environment, Grid
-from phd_swarm.core.ownership import assign_bins, bin_owners
-from phd_swarm.core.partition import cells, neighbours, partition
-from phd_swarm.core.polygons import points_in_polygon, polygon_area, polygon_centroid
+from phd_swarm.core.geometry import partition as part
+from phd_swarm.core.geometry.grid import Environment, Grid
+from phd_swarm.core.geometry.ownership import assign_bins, bin_owners
+from phd_swarm.core.geometry.partition import cells, neighbours, partition
+from phd_swarm.core.geometry.polygons import points_in_polygon, polygon_area, polygon_centroid
 
 ENV = Environment(0.0, 0.0, 100.0, 100.0)
 GRID = Grid(ENV, 1.0)
@@ -484,7 +484,7 @@ def test_cells_clip_count_is_not_quadratic(monkeypatch):
 
 
 def test_cell_of_equals_the_global_cell_and_neighbours():
-    from phd_swarm.core.partition import cell_of
+    from phd_swarm.core.geometry.partition import cell_of
 
     rng = np.random.default_rng(21)
     env = Environment(0.0, 0.0, 100.0, 100.0)

@@ -1,11 +1,11 @@
-"""Tests of phd_swarm.core.polygons: cell radii, boxes, polygon distances, sorted bin sets."""
+"""Tests of phd_swarm.core.geometry.polygons: cell radii, boxes, distances, sorted bin sets."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from phd_swarm.core.polygons import (
+from phd_swarm.core.geometry.polygons import (
     bounding_boxes,
     cell_radii,
     cell_radius,

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from phd_swarm.core.grid import Environment, Grid
+from phd_swarm.core.geometry.grid import Environment, Grid
 
 GRID = Grid(Environment(-2.0, 1.0, 3.0, 4.0), 0.5)  # nx = 10, ny = 6
 
