@@ -7,7 +7,8 @@ Run with ``scripts/bench.sh papaioannou [--quick] [--repeats 3] [--no-ros]``. Me
   centre) in the distributed engine, the engine's steps and the sweeps' per-step scoring
   (OSPA of the team's estimates, the figures) apart; the issue's target is <= 5 s;
 - **the tracking reward**: one evaluation of eq. 18 for the 17 moves of eq. 4
-  (:meth:`phd_swarm.core.renyi_tracking.RenyiTracking.choose`, vectorised over moves and
+  (:meth:`phd_swarm.core.controllers.sat_search_track.tracking.RenyiTracking.choose`,
+  vectorised over moves and
   particles) on a predicted particle cloud of N = 300, 1,200 and 6,000 particles around
   1, 2 and 4 estimates: median ms per evaluation and ns per (move x particle);
 - **the ROS run** (unless ``--no-ros``): ``run_swarm.sh config/papaioannou_small.yaml``
@@ -28,7 +29,7 @@ from results_io import machine_meta, run_swarm_figures, time_trial, write_result
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
 from phd_swarm.core import registry
-from phd_swarm.core.agent_moves import admissible_positions
+from phd_swarm.core.controllers.sat_search_track.agent_moves import admissible_positions
 
 ROOT = Path(__file__).resolve().parents[1]
 

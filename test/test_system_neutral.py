@@ -31,8 +31,7 @@ SHARED = ("phd_swarm.core.exchange.faults", "phd_swarm.core.exchange.contacts",
           "phd_swarm.core.exchange.radio")
 #: System modules still at the core's root (to move under their role, issue 35 part 4).
 ROOT_SYSTEM_MODULES = tuple(f"phd_swarm.core.{m}" for m in (
-    "cumulative", "search_map", "search_plan", "agent_moves", "renyi_tracking",
-    "tracking_overlap", "grid_graph", "reward_sets"))
+    "cumulative", "search_map", "grid_graph", "reward_sets"))
 #: Part names too common to tell a system by (``none`` is also an option value).
 COMMON_NAMES = {"none"}
 #: Tools that belong to one paper: its tables, fits and studies.

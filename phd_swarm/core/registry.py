@@ -72,7 +72,7 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
         "lawnmower": "phd_swarm.core.controllers.sung_planners",
         "nearest_gaussian": "phd_swarm.core.controllers.sung_planners",
         "phd": "phd_swarm.core.controllers.lloyd",
-        "sat_search_track": "phd_swarm.core.controllers.sat_search_track",
+        "sat_search_track": "phd_swarm.core.controllers.sat_search_track.controller",
         "uniform": "phd_swarm.core.controllers.lloyd",
     },
 }

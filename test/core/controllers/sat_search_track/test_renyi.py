@@ -16,7 +16,18 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal, norm
 
-from phd_swarm.core.agent_moves import action_offsets, admissible_positions
+from phd_swarm.core.controllers.sat_search_track.agent_moves import (
+    action_offsets,
+    admissible_positions,
+)
+from phd_swarm.core.controllers.sat_search_track.renyi import (
+    best_action,
+    predicted_measurements,
+    pseudo_update_weights,
+    renyi_reward,
+    square_clutter,
+)
+from phd_swarm.core.controllers.sat_search_track.tracking import RenyiTracking
 from phd_swarm.core.estimators.detection import SquareFov
 from phd_swarm.core.estimators.range_bearing import (
     RangeBearingSensor,
@@ -24,14 +35,6 @@ from phd_swarm.core.estimators.range_bearing import (
     range_bearing_log_likelihood,
 )
 from phd_swarm.core.estimators.smc_phd import ParticleSet, update
-from phd_swarm.core.renyi_tracking import (
-    RenyiTracking,
-    best_action,
-    predicted_measurements,
-    pseudo_update_weights,
-    renyi_reward,
-    square_clutter,
-)
 
 PAPER = RangeBearingSensor()
 SIDE = 10.0

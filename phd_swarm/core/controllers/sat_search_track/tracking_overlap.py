@@ -52,8 +52,8 @@ from collections import deque
 
 import numpy as np
 
-from .geometry.points import as_points
-from .ospa import ospa
+from ...geometry.points import as_points
+from ...ospa import ospa
 
 __all__ = ["THRESHOLD_FORMS", "OverlapWindow", "overlap_increment", "pick_switcher",
            "squares_overlap"]

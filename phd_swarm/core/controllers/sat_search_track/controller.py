@@ -1,7 +1,7 @@
 """Papaioannou et al.'s search-and-track control: plan and search, track by Rényi, yield overlaps.
 
 Registered as the ``sat_search_track`` controller. At the end of step k an agent at s_k
-chooses one of the 17 admissible moves of eq. 4 (:mod:`phd_swarm.core.agent_moves`):
+chooses one of the 17 admissible moves of eq. 4 (:mod:`.agent_moves`):
 
 - **Mode** (Sec. III, V-C): tracking while its filter has targets (X^_k or a tentative
   detection not empty, from the ``papaioannou_sat`` estimator's ``track_states``; a step
@@ -17,15 +17,15 @@ chooses one of the 17 admissible moves of eq. 4 (:mod:`phd_swarm.core.agent_move
   baseline (no plan, a random admissible move towards unvisited nodes).
 - **Track** (Sec. V-C a): the move that maximises the Rényi divergence (eq. 18, alpha) between
   the predicted target density and its pseudo-update with the measurements predicted from
-  X^_{k+1|k} (:mod:`phd_swarm.core.renyi_tracking`). The prediction to k+1 is the mean one:
+  X^_{k+1|k} (:mod:`.renyi`). The prediction to k+1 is the mean one:
   each particle moved by F without noise, its weight times p_S (the agent's random
   generator is not spent on planning).
 - **Overlap** (Sec. V-C b): with every agent in range that also tracks, the squares' overlap
   and eq. 19 on the exchanged predicted multi-target states (the estimates only, the
   estimator's ``predicted_states``) feed a 3-step window per pair
-  (:mod:`phd_swarm.core.tracking_overlap`); when it fires (the window's sum of DeltaL, or
+  (:mod:`.tracking_overlap`); when it fires (the window's sum of DeltaL, or
   with ``overlap_threshold_form: mean`` their mean, is <= Q_th), the agent
-  :func:`~phd_swarm.core.tracking_overlap.pick_switcher` names switches to search.
+  :func:`.tracking_overlap.pick_switcher` names switches to search.
   :attr:`SatSearchTrack.overlap_step` says what the test did at the last decision.
 
 Reference: S. Papaioannou et al., "A cooperative multi-agent probabilistic framework for
@@ -39,21 +39,21 @@ from typing import Any
 
 import numpy as np
 
-from .. import registry
-from .. import search_map as sm
-from ..agent_moves import action_offsets, admissible_positions
-from ..outputs import Output
-from ..params import ParamSpec
-from ..renyi_tracking import RenyiTracking
-from ..search_plan import (
+from ... import registry
+from ... import search_map as sm
+from ...outputs import Output
+from ...params import ParamSpec
+from ..base import Controller, Decision, Knowledge
+from .agent_moves import action_offsets, admissible_positions
+from .search_plan import (
     SearchPlan,
     greedy_path,
     joint_paths,
     random_search_action,
     search_action,
 )
-from ..tracking_overlap import THRESHOLD_FORMS, OverlapWindow, pick_switcher, squares_overlap
-from .base import Controller, Decision, Knowledge
+from .tracking import RenyiTracking
+from .tracking_overlap import THRESHOLD_FORMS, OverlapWindow, pick_switcher, squares_overlap
 
 OPTIONS = (
     ParamSpec("move_step", 2.0, "sat_search_track: radial step Delta_R of eq. 4 [m] (Sec. "

@@ -8,7 +8,18 @@ import time
 import numpy as np
 import pytest
 
-from phd_swarm.core.agent_moves import action_offsets, admissible_positions
+from phd_swarm.core.controllers.sat_search_track.agent_moves import (
+    action_offsets,
+    admissible_positions,
+)
+from phd_swarm.core.controllers.sat_search_track.search_plan import (
+    TIE_TOLERANCE,
+    SearchPlan,
+    greedy_path,
+    joint_paths,
+    random_search_action,
+    search_action,
+)
 from phd_swarm.core.search_map import (
     SearchGrid,
     initial_values,
@@ -16,14 +27,6 @@ from phd_swarm.core.search_map import (
     searched_fraction,
     unvisited,
     update,
-)
-from phd_swarm.core.search_plan import (
-    TIE_TOLERANCE,
-    SearchPlan,
-    greedy_path,
-    joint_paths,
-    random_search_action,
-    search_action,
 )
 
 

@@ -6,11 +6,11 @@ import numpy as np
 
 from phd_swarm.core import registry
 from phd_swarm.core.controllers.base import Knowledge
+from phd_swarm.core.controllers.sat_search_track.tracking_overlap import pick_switcher
 from phd_swarm.core.exchange.radio import RangeRadio
 from phd_swarm.core.exchange.sat_share import SatMsg, SatShare, SatView
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.square_range_bearing import simulate_scan
-from phd_swarm.core.tracking_overlap import pick_switcher
 from phd_swarm.sim.presets import PRESETS
 
 

@@ -5,7 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.agent_moves import action_offsets, admissible_positions
+from phd_swarm.core.controllers.sat_search_track.agent_moves import (
+    action_offsets,
+    admissible_positions,
+)
 
 
 def test_the_papers_settings_give_17_actions_in_a_fixed_order():

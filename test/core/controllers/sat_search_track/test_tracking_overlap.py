@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core.tracking_overlap import (
+from phd_swarm.core.controllers.sat_search_track.tracking_overlap import (
     OverlapWindow,
     overlap_increment,
     pick_switcher,

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .search_map import SearchGrid, check_values
+from ...search_map import SearchGrid, check_values
 
 __all__ = ["TIE_TOLERANCE", "greedy_path", "joint_paths", "search_action", "SearchPlan",
            "random_search_action"]
@@ -175,13 +175,13 @@ def search_action(positions_of_actions: np.ndarray, admissible: np.ndarray,
 
     xi_search is the Euclidean distance from the agent's position after action u to the
     next unvisited node v of its plan; ties go to the lowest action index (staying, index
-    0 in :func:`~phd_swarm.core.agent_moves.action_offsets`, wins a tie).
+    0 in :func:`.agent_moves.action_offsets`, wins a tie).
 
     Parameters
     ----------
     positions_of_actions : np.ndarray, shape (U, 2)
         The position each action leads to [m]
-        (:func:`~phd_swarm.core.agent_moves.admissible_positions`).
+        (:func:`.agent_moves.admissible_positions`).
     admissible : np.ndarray of bool, shape (U,)
         Which actions are admissible; at least one.
     next_node_position : array_like, shape (2,)
@@ -325,7 +325,7 @@ def random_search_action(rng: np.random.Generator, positions_of_actions: np.ndar
     side : float, optional
         Side of the sensing square [m]; ``grid.side`` by default.
     stay : int
-        Index of the staying action (0 in :func:`~phd_swarm.core.agent_moves.action_offsets`).
+        Index of the staying action (0 in :func:`.agent_moves.action_offsets`).
 
     Returns
     -------
