@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.core.estimators.central_phd import CentralPhdFilter
+from phd_swarm.core.estimators.grid_phd.central import CentralPhdFilter
 from phd_swarm.core.geometry.grid import Environment, Grid
 from phd_swarm.core.geometry.ownership import bin_owners
 from phd_swarm.core.geometry.partition import partition

@@ -110,14 +110,14 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.core.estimators.gm_phd import GaussianMixture, GmPhdModel, constant_p_d
+from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture, GmPhdModel, constant_p_d
 from phd_swarm.core.ospa import ospa
 from phd_swarm.core.scan import Scan
 
 try:  # the estimator class is moving to its own module
-    from phd_swarm.core.estimators.gm_phd_estimator import GmPhdEstimator
+    from phd_swarm.core.estimators.gm_phd.estimator import GmPhdEstimator
 except ImportError:  # pragma: no cover - older layout
-    from phd_swarm.core.estimators.gm_phd import GmPhdEstimator
+    from phd_swarm.core.estimators.gm_phd.filter import GmPhdEstimator
 
 OURS = "phd_swarm"
 STONESOUP = "stonesoup 1.9.1"
@@ -473,10 +473,10 @@ def run_revisit(data: ScenarioData, spec: RevisitSpec) -> list[tuple[str, Run]]:
 def _smc_estimator(spec: TrackingSpec, particles: int, seed: int, log_likelihood,
                    clutter, birth_fraction: float = 0.1):
     """Our SMC-PHD set up as Stone Soup's on B (see :func:`run_ours_smc`)."""
-    from phd_swarm.core.estimators.smc_models import constant_p_d as particle_p_d
-    from phd_swarm.core.estimators.smc_models import linear_gaussian_transition
-    from phd_swarm.core.estimators.smc_phd import ParticleSet
-    from phd_swarm.core.estimators.smc_phd_estimator import Resampling, SmcPhdEstimator
+    from phd_swarm.core.estimators.smc_phd.estimator import Resampling, SmcPhdEstimator
+    from phd_swarm.core.estimators.smc_phd.filter import ParticleSet
+    from phd_swarm.core.estimators.smc_phd.models import constant_p_d as particle_p_d
+    from phd_swarm.core.estimators.smc_phd.models import linear_gaussian_transition
 
     f, qm = cv_matrices(spec.dt, spec.q)
     n_birth = max(1, int(birth_fraction * particles))
@@ -506,7 +506,7 @@ def run_ours_smc(data: ScenarioData, spec: TrackingSpec, particles: int,
     measurement (weight above 0.5: the weighted mean position), as on Stone Soup's side.
     Timed: predict + update + resample + extract.
     """
-    from phd_swarm.core.estimators.smc_models import linear_gaussian_log_likelihood
+    from phd_swarm.core.estimators.smc_phd.models import linear_gaussian_log_likelihood
 
     h = np.hstack([np.eye(2), np.zeros((2, 2))])
     ll = linear_gaussian_log_likelihood(h, spec.r_sd ** 2 * np.eye(2))

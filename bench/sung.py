@@ -6,7 +6,7 @@ engine (the only one for this system), CPU seconds of this process for one full 
 belief, seed 0), of its moving-target twin with GP prediction
 (``sung_moving.yaml``, method ``gp``), and of the per-step scoring the sweeps add (OSPA,
 tracks, Mahalanobis distances). Then the GP prediction alone
-(:func:`phd_swarm.core.estimators.gp_motion.predict_tracks`) per confirmed track per step,
+(:func:`phd_swarm.core.estimators.sung.gp_motion.predict_tracks`) per confirmed track per step,
 for 1, 10 and 50 tracks at the 100-point window of ``config/sung_moving.yaml``. Last, the
 system as ROS nodes: ``run_swarm.sh config/sung_static.yaml --robots 1`` in lockstep
 (world, monitor, recorder and the robot, one process each), its real-time factor while
@@ -26,7 +26,7 @@ import numpy as np
 from results_io import machine_meta, run_swarm_figures, time_trial, write_results
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
-from phd_swarm.core.estimators.gp_motion import GpHyperparameters, predict_tracks
+from phd_swarm.core.estimators.sung.gp_motion import GpHyperparameters, predict_tracks
 
 
 def _trial(spec: str, method: str, steps: int | None):

@@ -1,8 +1,7 @@
 """The shared machinery names no system: nodes, engines and tools reach parts by declaration.
 
 A system is its own modules (issue 35): its parts under ``core/{sensors,estimators,
-exchange,controllers}`` (and the few system modules still at the core's root), its ROS
-faces under ``nodes/faces``. The robot node, the observers, the engines and the generic
+exchange,controllers}``, its ROS faces under ``nodes/faces``. The robot node, the observers, the engines and the generic
 tools must not import those modules nor name a built-in part by string; they read what the
 parts declare (outputs, wires, hooks). Parsed, not imported, like :mod:`test_layers`.
 
@@ -29,9 +28,6 @@ SYSTEM_PACKAGES = ("phd_swarm.core.sensors", "phd_swarm.core.estimators",
 #: Shared modules inside those packages: role bases and the exchange's transport models.
 SHARED = ("phd_swarm.core.exchange.faults", "phd_swarm.core.exchange.contacts",
           "phd_swarm.core.exchange.radio")
-#: System modules still at the core's root (to move under their role, issue 35 part 4).
-ROOT_SYSTEM_MODULES = tuple(f"phd_swarm.core.{m}" for m in (
-    "cumulative", "search_map", "grid_graph", "reward_sets"))
 #: Part names too common to tell a system by (``none`` is also an option value).
 COMMON_NAMES = {"none"}
 #: Tools that belong to one paper: its tables, fits and studies.
@@ -46,7 +42,7 @@ PART_NAMES = {n for names in BUILTIN_PARTS.values() for n in names} - COMMON_NAM
 def _system_module(module: str) -> bool:
     if module.endswith(".base") or module.startswith(SHARED):
         return False
-    return module.startswith(SYSTEM_PACKAGES) or module.startswith(ROOT_SYSTEM_MODULES)
+    return module.startswith(SYSTEM_PACKAGES)
 
 
 def offences(path: Path, text: str | None = None) -> list[str]:

@@ -1,6 +1,6 @@
 """The parameters of every phd_swarm node: name, default, description, range (rclpy-free).
 
-Nodes declare these with :func:`phd_swarm.nodes.params.declare` (type, description and range
+Nodes declare these with :func:`phd_swarm.nodes.ros_params.declare` (type, description and range
 become the ROS parameter descriptor, so ``ros2 param describe`` shows them); the run-config
 loader (:mod:`phd_swarm.config`) checks a YAML file against the same table before any process
 starts, so a typo or an out-of-range value fails fast with the file and key in the message.

@@ -53,10 +53,10 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
         "square_range_bearing": "phd_swarm.core.sensors.square_range_bearing",
     },
     "estimator": {
-        "grid_phd": "phd_swarm.core.estimators.grid_phd",
-        "papaioannou_sat": "phd_swarm.core.estimators.papaioannou",
-        "shirsat_gmphd": "phd_swarm.core.estimators.shirsat",
-        "sung_gmphd": "phd_swarm.core.estimators.sung",
+        "grid_phd": "phd_swarm.core.estimators.grid_phd.estimator",
+        "papaioannou_sat": "phd_swarm.core.estimators.papaioannou.estimator",
+        "shirsat_gmphd": "phd_swarm.core.estimators.shirsat.estimator",
+        "sung_gmphd": "phd_swarm.core.estimators.sung.estimator",
     },
     "exchange": {
         "meet_merge": "phd_swarm.core.exchange.meet_merge",
@@ -65,9 +65,9 @@ BUILTIN_PARTS: dict[str, dict[str, str]] = {
         "voronoi_phd": "phd_swarm.core.exchange.voronoi_phd.part",
     },
     "controller": {
-        "chen_o": "phd_swarm.core.controllers.power_lloyd",
-        "chen_p": "phd_swarm.core.controllers.power_lloyd",
-        "dtds_walk": "phd_swarm.core.controllers.dtds_walk",
+        "chen_o": "phd_swarm.core.controllers.power_lloyd.controller",
+        "chen_p": "phd_swarm.core.controllers.power_lloyd.controller",
+        "dtds_walk": "phd_swarm.core.controllers.dtds_walk.controller",
         "largest_gaussian": "phd_swarm.core.controllers.sung_planners",
         "lawnmower": "phd_swarm.core.controllers.sung_planners",
         "nearest_gaussian": "phd_swarm.core.controllers.sung_planners",

@@ -5,7 +5,7 @@ PHD (eq. 3-6), up to the rounding of sums taken in another order
 (``test/engines/test_distributed.py``): what each robot holds is the team PHD over its own
 cell. So a run of the papers' algorithms can be computed without the protocol, as the
 papers' own simulations are: one
-:class:`~phd_swarm.core.estimators.central_phd.CentralPhdFilter` over the whole map, one
+:class:`~phd_swarm.core.estimators.grid_phd.central.CentralPhdFilter` over the whole map, one
 partition of the bins (the power diagram of Chen eq. 12-13, or the Voronoi diagram of Dames
 eq. 7 when every power weight is 0), and each robot's controller (the same registered
 controller objects and generators the agents have, :mod:`phd_swarm.core.controllers`) on its
@@ -41,10 +41,10 @@ from functools import partial
 
 import numpy as np
 
-from phd_swarm.core import phd_grid
 from phd_swarm.core.agent import Team, robot_generator
 from phd_swarm.core.controllers.base import CellDensity, Knowledge
-from phd_swarm.core.cumulative import observe_scans
+from phd_swarm.core.controllers.power_lloyd.cumulative import observe_scans
+from phd_swarm.core.estimators.grid_phd import filter as phd_grid
 from phd_swarm.core.geometry.ownership import bin_owners
 from phd_swarm.core.geometry.partition import cell_of
 from phd_swarm.core.scan import Scan
@@ -160,12 +160,12 @@ class CentralEngine:
     def _predict_per_cell(self, order: np.ndarray, starts: np.ndarray) -> None:
         """Eq. 3 as the robots compute it: each cell's bins spread in their own box.
 
-        With a kernel that :func:`~phd_swarm.core.phd_grid.convolve_mass` applies by FFT
-        (Chen's at 0.1 m), the round-off is ~1e-16 of the largest mass in the convolved
+        With a kernel that :func:`~phd_swarm.core.estimators.grid_phd.filter.convolve_mass` applies
+        by FFT (Chen's at 0.1 m), the round-off is ~1e-16 of the largest mass in the convolved
         box. In a searched-out cell every mass can lie below the round-off of a whole-map
         FFT, and the centroid of that cell would follow it; the robots convolve their own
-        bins only (:func:`~phd_swarm.core.phd_grid.spread`), so their round-off is that of
-        their own masses. Spreading each cell's bins the same way keeps the two engines'
+        bins only (:func:`~phd_swarm.core.estimators.grid_phd.filter.spread`), so their round-off
+        is that of their own masses. Spreading each cell's bins the same way keeps the two engines'
         robots together (test/engines/test_central.py). Sums are the same up to the
         order of the additions.
         """
@@ -205,7 +205,7 @@ class CentralEngine:
         ``figures(controllers, truth)`` hook of the controller part, given the
         controllers of the robots that decided at the last step (e.g. ``chen_o``'s count
         of busy robots that turned idle with a target in view,
-        :func:`~phd_swarm.core.controllers.power_lloyd.switching_figures`). The central
+        :func:`~phd_swarm.core.controllers.power_lloyd.controller.switching_figures`). The central
         form of the estimator is the grid PHD's, which has no figures of its own.
         """
         if self._figures is None:

@@ -24,7 +24,7 @@ robot node runs too, for whatever system ``scenario.system`` names;
 4. the world moves the robots toward their goals and the targets, to step k+1.
 
 With ``reference=True`` the estimator's central form (its ``central`` hook: for the grid
-PHD a :class:`~phd_swarm.core.estimators.central_phd.CentralPhdFilter`) is fed the same
+PHD a :class:`~phd_swarm.core.estimators.grid_phd.central.CentralPhdFilter`) is fed the same
 measurement sets in robot-id order, for the equivalence tests.
 
 Lossy links (``faults``, a :class:`~phd_swarm.core.exchange.faults.LinkFaults`): every
@@ -389,10 +389,10 @@ class DistributedEngine:
         """The system's own per-step figures (its estimator's ``figures`` hook), or none.
 
         E.g. Sung & Tokekar's counts of components and tracks and Mahalanobis distances
-        (:mod:`phd_swarm.core.estimators.sung_figures`). A hook that takes the keyword
+        (:mod:`phd_swarm.core.estimators.sung.figures`). A hook that takes the keyword
         ``ids`` is also given the true targets' ids (when known), and one that takes
         ``controllers`` the live robots' controllers (e.g. Papaioannou et al.'s per-target
-        figures and overlap counts, :mod:`phd_swarm.core.estimators.papaioannou_figures`).
+        figures and overlap counts, :mod:`phd_swarm.core.estimators.papaioannou.figures`).
         The controller part's ``figures`` hook, ``(controllers, truth)``, adds its own
         (as :meth:`phd_swarm.engines.central.CentralEngine.figures` does).
         """

@@ -48,8 +48,8 @@ from phd_swarm.nodes import completeness, convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers_cdr
 from phd_swarm.nodes.observe import TeamReader, add_windows, union
-from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.ros_params import declare, declare_scenario
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,

@@ -81,8 +81,8 @@ from phd_swarm.logs.qos_yaml import qos_yaml
 from phd_swarm.logs.schemas import SEPARATOR, DefinitionNotFoundError, message_definition
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.params import ParameterError, declare
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.ros_params import ParameterError, declare
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
 #: Topics the graph poll records: /clock and everything under /world, /monitor, /robot_<n>.

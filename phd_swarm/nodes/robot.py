@@ -80,9 +80,9 @@ from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
-from phd_swarm.nodes.params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.robot_outputs import RobotOutputs
+from phd_swarm.nodes.ros_params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.wire import wire_for
 from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotStatus, TeamState
 

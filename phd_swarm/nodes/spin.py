@@ -25,7 +25,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
-from phd_swarm.nodes.params import ParameterError
+from phd_swarm.nodes.ros_params import ParameterError
 
 #: Seconds the executor spins between two checks for a stop signal or finished nodes.
 SPIN_PERIOD = 0.1

@@ -51,8 +51,8 @@ from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.markers import world_markers_cdr
-from phd_swarm.nodes.params import declare, declare_scenario
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.ros_params import declare, declare_scenario
 from phd_swarm.sim.world import World
 from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TargetSet, TeamState
 

@@ -7,7 +7,7 @@ is in the world's truth set (it leaves the set when it dies, leaves the area or 
 ends). Two sources:
 
 - :func:`alive_steps`, from a trial's ``target_ids`` series (the per-target figures of
-  :mod:`phd_swarm.core.estimators.papaioannou_figures`), so each trial reports its own;
+  :mod:`phd_swarm.core.estimators.papaioannou.figures`), so each trial reports its own;
 - :func:`in_area_lifetimes`, from the simulator alone (:class:`~phd_swarm.sim.world.World`
   over the scenario's steps, no robots moving), to measure a lifetime model over many
   seeds.

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from phd_swarm.core.controllers.dtds_walk.grid_graph import lattice_count, lattice_range
 from phd_swarm.core.extraction import ExtractionConfig
 from phd_swarm.core.geometry.grid import Environment, Grid
-from phd_swarm.core.grid_graph import lattice_count, lattice_range
 from phd_swarm.core.models import PhdModels
 from phd_swarm.core.params import (
     expect_bool,
@@ -229,10 +229,10 @@ class Scenario:
         options (:mod:`phd_swarm.core.system`); default: Dames' PHD-weighted Lloyd.
     robot_start_grid : float or None
         If set, the spacing [m] of a square grid of nodes anchored at E's (xmin, ymin)
-        corner (:class:`~phd_swarm.core.grid_graph.GridGraph`), and each robot starts on a
-        node drawn uniformly among those inside ``robot_start_box`` (two robots may share
-        one): Shirsat & Berman's robots "start at random positions on the grid" (Sec. VI);
-        set it to the ``dtds_walk`` controller's ``grid_spacing``. None (default): robots
+        corner (:class:`~phd_swarm.core.controllers.dtds_walk.grid_graph.GridGraph`), and each
+        robot starts on a node drawn uniformly among those inside ``robot_start_box`` (two robots
+        may share one): Shirsat & Berman's robots "start at random positions on the grid" (Sec.
+        VI); set it to the ``dtds_walk`` controller's ``grid_spacing``. None (default): robots
         start uniformly in the box.
     """
 
@@ -307,8 +307,8 @@ class Scenario:
         """Node indices (first, last) along x and y of the start grid inside the start box.
 
         The nodes are ``(env.xmin + i g, env.ymin + j g)``, g = :attr:`robot_start_grid`,
-        over E (those of :class:`~phd_swarm.core.grid_graph.GridGraph` with that spacing);
-        a range is empty (first > last) if no node lies in the box.
+        over E (those of :class:`~phd_swarm.core.controllers.dtds_walk.grid_graph.GridGraph` with
+        that spacing); a range is empty (first > last) if no node lies in the box.
 
         Raises
         ------

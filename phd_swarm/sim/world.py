@@ -30,7 +30,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from phd_swarm.core.lloyd import next_position, step_length
+from phd_swarm.core.geometry.centroids import next_position, step_length
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.targets import Targets, make_targets
 
@@ -43,8 +43,8 @@ def start_positions(scenario: Scenario, rng: np.random.Generator) -> np.ndarray:
 
     Uniform in ``scenario.robot_start_box``; with ``scenario.robot_start_grid`` = g,
     uniform among the nodes ``(env.xmin + i g, env.ymin + j g)`` inside the box (the
-    nodes of :class:`~phd_swarm.core.grid_graph.GridGraph` with spacing g, to the bit),
-    independently per robot (Shirsat & Berman Sec. VI).
+    nodes of :class:`~phd_swarm.core.controllers.dtds_walk.grid_graph.GridGraph` with spacing g, to
+    the bit), independently per robot (Shirsat & Berman Sec. VI).
     """
     if scenario.robot_start_grid is None:
         box = np.asarray(scenario.robot_start_box, dtype=float)
@@ -161,10 +161,10 @@ class World:
     def apply_goals(self, goals: Mapping[int, np.ndarray]) -> None:
         """Move each live robot towards its goal, at most ``robot_max_speed * dt`` (Chen eq. 3).
 
-        A robot within reach lands on its goal (:func:`~phd_swarm.core.lloyd.next_position`);
-        the new position is clipped into E, so a goal outside E is approached along the
-        straight line and then slid along the boundary. Robots without a goal and dead
-        robots stay where they are.
+        A robot within reach lands on its goal
+        (:func:`~phd_swarm.core.geometry.centroids.next_position`); the new position is clipped
+        into E, so a goal outside E is approached along the straight line and then slid along the
+        boundary. Robots without a goal and dead robots stay where they are.
 
         Parameters
         ----------

@@ -10,7 +10,7 @@ with the live monitor's own functions, on the monitor's inputs:
 - any other system (Sung & Tokekar's GM-PHD): the union of the robots' own estimates with
   the sum of their expected counts, scored by
   :func:`phd_swarm.core.scoring.score_estimates`, and the estimator part's own per-step
-  figures (its ``figures`` hook, e.g. :mod:`phd_swarm.core.estimators.sung_figures`) from
+  figures (its ``figures`` hook, e.g. :mod:`phd_swarm.core.estimators.sung.figures`) from
   the robots' components and tracks.
 
 Where the monitor's metrics are in the log too, it reports how far the two OSPA series are

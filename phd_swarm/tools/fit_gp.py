@@ -10,7 +10,7 @@ turning walk of Sec. VI-A.4), simulated for ``--steps`` steps from seeds that no
 experiment uses (``--seed`` and up), each position observed with the scenario's
 measurement noise (``models.measurement.variance``). The hyperparameters maximise the GP's
 log marginal likelihood over windows of ``--window`` points
-(:func:`phd_swarm.core.estimators.gp_motion.fit_hyperparameters`). Prints the
+(:func:`phd_swarm.core.estimators.sung.gp_motion.fit_hyperparameters`). Prints the
 ``system.options`` block to paste into a config, with the figures of the fit.
 """
 
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from phd_swarm.config import load_run_config
-from phd_swarm.core.estimators.gp_motion import fit_hyperparameters
+from phd_swarm.core.estimators.sung.gp_motion import fit_hyperparameters
 from phd_swarm.sim.targets import make_targets
 
 ROOT = Path(__file__).resolve().parents[2]

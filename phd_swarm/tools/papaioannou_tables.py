@@ -7,7 +7,7 @@ Usage::
 ``DIR`` is a sweep directory of :mod:`phd_swarm.tools.sweep` made from a
 ``config/sweeps/papaioannou_*.yaml`` spec. For each (method, agents, targets) cell of each
 sweep, over its runs (the per-step figures of
-:mod:`phd_swarm.core.estimators.papaioannou_figures`):
+:mod:`phd_swarm.core.estimators.papaioannou.figures`):
 
 - **searched area** [%]: the mean over runs of the team's searched area (Figs. 1, 2, 4) at
   the last step, and its curve over time;

@@ -294,7 +294,7 @@ def save_figures(rows: Sequence[dict[str, Any]], path: str | Path, title: str = 
     """An estimator's per-step figures over time (Sung & Tokekar Fig. 8-10), as a PNG.
 
     ``rows`` are per-step dicts with ``t`` and the figures of :data:`FIGURE_PANELS` (e.g.
-    :mod:`phd_swarm.core.estimators.sung_figures`); a figure missing from a row, or NaN,
+    :mod:`phd_swarm.core.estimators.sung.figures`); a figure missing from a row, or NaN,
     leaves a gap, and a panel none of whose figures is in the rows is left out
     (:func:`figure_panels`); figures of no panel are not drawn. The true
     number of targets (``cardinality_true``) is drawn with the sums of weights.

@@ -7,7 +7,7 @@ Usage::
 The paper gives E[tau] ~ 68 s for 3 robots on 5 x 5 m (Sec. VI, Fig. 5a) and, for 20
 robots, 20 s on 15 x 15 m, 190 s on 20 x 20 m and 430 s on 30 x 30 m (Table 1), but not
 the grid spacing, the seconds per step, the neighbourhood or which meetings it counts.
-This tool computes the exact expectations (:mod:`phd_swarm.core.analysis.renewal`) for
+This tool computes the exact expectations (:mod:`phd_swarm.core.analysis.renewal_exact`) for
 every combination of
 
 - grid spacing 0.25, 0.5, 1 m and 4 or 8 neighbours (:data:`GEOMETRIES`);
@@ -46,9 +46,9 @@ from pathlib import Path
 
 import numpy as np
 
-from phd_swarm.core.analysis import renewal
+from phd_swarm.core.analysis import renewal_exact as renewal
 from phd_swarm.core.analysis.renewal_simulation import simulate_meetings, window_averages
-from phd_swarm.core.grid_graph import GridGraph
+from phd_swarm.core.controllers.dtds_walk.grid_graph import GridGraph
 from phd_swarm.tools import plots
 
 #: (grid spacing [m], neighbours) of the tables.

@@ -46,7 +46,7 @@ import yaml
 from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
-from phd_swarm.core.cumulative import cumulative_weight, observe_scans
+from phd_swarm.core.controllers.power_lloyd.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T

@@ -41,7 +41,7 @@ from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.completeness import Completeness
-from phd_swarm.nodes.params import ros_refusal
+from phd_swarm.nodes.ros_params import ros_refusal
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.tools.dds import (

@@ -2,7 +2,7 @@
 
 A system's ``figures`` hook may return, besides scalars, a 1-D array per step whose length
 changes from step to step (e.g. one entry per live target, Papaioannou et al.'s
-``target_ids``, :mod:`phd_swarm.core.estimators.papaioannou_figures`). The sweep runner
+``target_ids``, :mod:`phd_swarm.core.estimators.papaioannou.figures`). The sweep runner
 keeps them as rows and stacks them at the end with :func:`pad_rows`: one (steps, W) array,
 W the longest row, each row padded at its end with -1 (integers) or NaN (floats); a step
 without a value is a row of padding. The arrays travel in the trial's ``.npz`` series as

@@ -10,20 +10,20 @@ Usage::
 the first ``DIR``), with one row per sweep and ``shirsat_reward_vs_time.png`` (Fig. 5b: the
 reward-set cardinality over time, mean and 10-90 % band over the runs, per sweep).
 
-Per run (the per-step figures of :mod:`phd_swarm.core.estimators.shirsat_figures`):
+Per run (the per-step figures of :mod:`phd_swarm.core.estimators.shirsat.figures`):
 
 - **mean inter-arrival time** E[tau]: N T dt / sum_k robots_meeting(k), the run's time
   robot-steps over its renewals (a robot at a renewal epoch at step k, eq. 5-6, counts
   once per step, as a renewal process counts epochs; consecutive steps on one node are
   consecutive epochs) -- the empirical form of Kac's mean return time that
-  :func:`phd_swarm.core.analysis.renewal.mean_interarrival` computes exactly (event
+  :func:`phd_swarm.core.analysis.renewal_exact.mean_interarrival` computes exactly (event
   ``robot``), printed beside it;
 - **t_reward**: the first time every robot's reward cardinality equals the true number of
   targets (``all_found``; the paper's criterion); NaN if never;
 - **reward %** (Table 1, "the ratio of the mean number of targets detected by the robots
   until the mean inter-arrival time to the actual number of targets"): the robots' mean
   number of reward members that match a true target (``reward_true_mean`` of
-  :mod:`phd_swarm.core.estimators.shirsat_figures`: by label for a labelled member, else
+  :mod:`phd_swarm.core.estimators.shirsat.figures`: by label for a labelled member, else
   within the 1.5 m gate of a target, each target matched once), over the true number of
   targets, at two times: the sweep's pooled E[tau] (all its runs' robot time over all
   their renewals) and the paper's own E[tau] (20 / 190 / 430 s for Table 1, 68 s for the
@@ -51,8 +51,8 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
-from phd_swarm.core.analysis.renewal import mean_interarrival
-from phd_swarm.core.grid_graph import GridGraph
+from phd_swarm.core.analysis.renewal_exact import mean_interarrival
+from phd_swarm.core.controllers.dtds_walk.grid_graph import GridGraph
 from phd_swarm.tools.sweep_results import load_series
 from phd_swarm.tools.tables import figure_grid, over_seeds, read_results, run, save_png
 
@@ -185,7 +185,7 @@ def markdown(tables: Sequence[dict[str, Any]]) -> str:
              "",
              "Per sweep: mean ± sample sd over the runs (median); E[tau] pooled is all runs' "
              "robot time over all their renewals; E[tau] exact is Kac's mean inter-arrival of "
-             "a robot's renewals on the grid (core/analysis/renewal.py). Reward %: the "
+             "a robot's renewals on the grid (core/analysis/renewal_exact.py). Reward %: the "
              "robots' mean number of reward members that match a true target (by label, or "
              "within 1.5 m, each target once) over the true number, at our pooled E[tau] "
              "and at the paper's; 'all members' counts every member, clutter included. "

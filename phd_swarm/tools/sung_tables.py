@@ -26,7 +26,7 @@ The time plots show, per method, the mean over seeds (line) and the 10-90 % band
 
 Per-run values (the paper's "computed by averaging the values of elements" is read as an
 average over the steps of a run; the per-step figures are those of
-:mod:`phd_swarm.core.estimators.sung_figures`):
+:mod:`phd_swarm.core.estimators.sung.figures`):
 
 - Tables I and III: mean and standard deviation over the steps of ``components``,
   ``tracks``, ``weights_components`` and ``weights_tracks`` (population sd, ``ddof=0``);
@@ -226,7 +226,7 @@ def run_values(series: dict[str, np.ndarray]) -> dict[str, float]:
     ----------
     series : dict of str to np.ndarray
         Per-step arrays of one trial (:func:`phd_swarm.tools.sweep_results.load_series`), with the
-        figures of :mod:`phd_swarm.core.estimators.sung_figures`.
+        figures of :mod:`phd_swarm.core.estimators.sung.figures`.
 
     Returns
     -------

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import models as core_models
-from phd_swarm.core.cumulative import cumulative_update_counts
+from phd_swarm.core.controllers.power_lloyd.cumulative import cumulative_update_counts
 from phd_swarm.core.exchange.voronoi_phd import context as context_mod
 from phd_swarm.core.exchange.voronoi_phd.participant import FilterContext
 from phd_swarm.core.geometry import ownership

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from phd_swarm.core import phd_grid
-from phd_swarm.core.cumulative import nearest_robot_cap
+from phd_swarm.core.controllers.power_lloyd.cumulative import nearest_robot_cap
+from phd_swarm.core.estimators.grid_phd import filter as phd_grid
 from phd_swarm.core.geometry.ownership import bin_owners
 from phd_swarm.core.geometry.partition import cells
 from phd_swarm.core.geometry.polygons import points_in_polygon

@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 
 from phd_swarm.config.sweep_spec import find_spec, load_spec
-from phd_swarm.core.search_map import searched_fraction
+from phd_swarm.core.estimators.papaioannou.search_map import searched_fraction
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim.lifetimes import alive_steps, in_area_lifetimes
 from phd_swarm.sim.presets import PRESETS

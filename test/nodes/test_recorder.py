@@ -31,7 +31,6 @@ from visualization_msgs.msg import Marker, MarkerArray
 from phd_swarm.config import load_run_config
 from phd_swarm.logs.mcap_log import open_log, read_messages, read_metadata, summarize
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.params import ParameterError
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.recorder import (
     Recorder,
@@ -41,6 +40,7 @@ from phd_swarm.nodes.recorder import (
     status_state,
     table_spec,
 )
+from phd_swarm.nodes.ros_params import ParameterError
 from phd_swarm_msgs.msg import RobotStatus, TargetSet, TeamState
 
 ROOT = Path(__file__).resolve().parents[2]

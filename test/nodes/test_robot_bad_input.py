@@ -88,8 +88,8 @@ def test_bad_messages_are_rejected_counted_and_the_team_finishes(tmp_path):
 
 @pytest.mark.ros
 def test_duplicate_or_unknown_robot_id_refuses_to_start(tmp_path):
-    from phd_swarm.nodes.params import ParameterError
     from phd_swarm.nodes.robot import RobotNode
+    from phd_swarm.nodes.ros_params import ParameterError
     from phd_swarm.testing import InProcessRos
 
     scenario = small_static_scenario(robots=3, steps=8)

@@ -77,7 +77,7 @@ def test_lockstep_team_equals_in_memory_engine_with_meetings(tmp_path):
 @pytest.mark.ros
 def test_the_ros_stack_refuses_the_labelled_sensor_naming_the_reading(tmp_path):
     """MeasurementSet and RewardSet carry no labels: the nodes refuse to run without them."""
-    from phd_swarm.nodes.params import ParameterError
+    from phd_swarm.nodes.ros_params import ParameterError
     from phd_swarm.testing import InProcessRos, start_swarm
 
     scenario = load_run_config(ROOT / "config" / "shirsat_small.yaml").scenario.with_system(

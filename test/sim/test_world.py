@@ -176,7 +176,7 @@ def test_default_starts_are_the_uniform_draw_of_the_start_stream_bit_for_bit():
 
 
 def test_robots_start_on_grid_nodes_inside_the_box_when_asked():
-    from phd_swarm.core.grid_graph import GridGraph
+    from phd_swarm.core.controllers.dtds_walk.grid_graph import GridGraph
 
     s = dames_static(robots=400).with_overrides(robot_start_grid=2.5, seed=4)
     q = World(s).robot_positions
@@ -197,8 +197,8 @@ def test_robots_start_on_grid_nodes_inside_the_box_when_asked():
 
 def test_a_robot_started_on_the_grid_walks_on_it():
     from phd_swarm.core.controllers.base import Knowledge
-    from phd_swarm.core.controllers.dtds_walk import DtdsWalk
-    from phd_swarm.core.controllers.dtds_walk import setup as walk_setup
+    from phd_swarm.core.controllers.dtds_walk.controller import DtdsWalk
+    from phd_swarm.core.controllers.dtds_walk.controller import setup as walk_setup
     from phd_swarm.core.system import SystemConfig
 
     s = dames_static(robots=3).with_overrides(robot_start_grid=1.0,

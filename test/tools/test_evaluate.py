@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
 
-from phd_swarm.core.estimators.central_phd import CentralPhdFilter
+from phd_swarm.core.estimators.grid_phd.central import CentralPhdFilter
 from phd_swarm.core.scan import Scan
 from phd_swarm.logs.mcap_log import LogWriter, open_log, read_messages
 from phd_swarm.nodes import convert
@@ -229,7 +229,7 @@ def chen_run(tmp_path_factory, record_swarm) -> Path:
 
 
 def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp_path):
-    from phd_swarm.core.cumulative import cumulative_weight
+    from phd_swarm.core.controllers.power_lloyd.cumulative import cumulative_weight
     from phd_swarm.engines.distributed import DistributedEngine
 
     run = load_run(chen_run / "run.mcap")

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 
-from phd_swarm.core.estimators.sung_figures import FIGURES
+from phd_swarm.core.estimators.sung.figures import FIGURES
 from phd_swarm.core.scoring import score_estimates
 from phd_swarm.nodes import topics as T
 from phd_swarm.tools.evaluate import COLUMNS

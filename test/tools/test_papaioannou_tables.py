@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core.controllers.sat_search_track.controller import OverlapStep
-from phd_swarm.core.estimators.papaioannou_figures import step_figures
+from phd_swarm.core.estimators.papaioannou.figures import step_figures
 from phd_swarm.tools import papaioannou_tables as pt
 from phd_swarm.tools.sweep import save_series
 

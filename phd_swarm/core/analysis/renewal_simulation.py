@@ -1,6 +1,6 @@
 """Meetings of robots on a grid walk, simulated with a seeded generator (Shirsat & Berman).
 
-The Monte Carlo side of :mod:`.renewal`: robots walking the grid graph's chain from their
+The Monte Carlo side of :mod:`.renewal_exact`: robots walking the grid graph's chain from their
 start nodes, the steps at which a meeting event (a given pair, a robot with any other, the
 whole team) happens, and the window averages of the time between them, to check the exact
 renewal results (Kac's lemma, eq. 7-8) against. Randomness only from the generator passed
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..grid_graph import GridGraph
-from .renewal import _check_event, _check_robots
+from ..controllers.dtds_walk.grid_graph import GridGraph
+from .renewal_exact import _check_event, _check_robots
 
 
 def start_nodes(graph: GridGraph, rng: np.random.Generator, shape: tuple[int, ...],

@@ -1,7 +1,7 @@
 """Lloyd controllers on Voronoi cells: ``phd`` (Dames 2020) and ``uniform`` (coverage).
 
 Each robot heads for the weighted centroid of its cell (Dames eq. 8), the integral being the
-sum over the bins it owns (:func:`phd_swarm.core.lloyd.centroid_goal`):
+sum over the bins it owns (:func:`phd_swarm.core.geometry.centroids.centroid_goal`):
 
 - ``phd``: phi = the PHD bin masses (Dames eq. 8; the "D" method of Chen et al.);
 - ``uniform``: phi = 1, the coverage baseline of Dames Sec. IV (Cortes et al.).
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import registry
-from ..lloyd import centroid_goal
+from ..geometry.centroids import centroid_goal
 from .base import Controller, Decision, Knowledge
 
 #: What the Lloyd controllers need: a grid density over the robot's own cell.

@@ -10,7 +10,7 @@ map) it reads from and writes to the estimator.
 One exception, declared when the part registers (``runs_in_exchange=True``): Dames' grid
 PHD is distributed over the robots' cells, its bins move from robot to robot with the
 cells and its update needs the neighbours' eta sums, so the ``voronoi_phd`` exchange runs
-that filter itself and the agent leaves it alone (:mod:`.grid_phd`).
+that filter itself and the agent leaves it alone (:mod:`.grid_phd.estimator`).
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ state's first two coordinates are the position [m]):
 - :func:`square_mass`: an axis-aligned square (Papaioannou et al.'s 10 m x 10 m area);
 
 and the detection models built on them, :class:`DiskFov` and :class:`SquareFov`, which
-follow the :data:`.gm_phd.DetectionProbability` call signature
+follow the :data:`.gm_phd.filter.DetectionProbability` call signature
 ``p_d(means (J, d), covs (J, d, d), sensor (2,)) -> (J,)`` and give ``at_points`` for
 particle filters (p_D at a point: ``p_inside`` inside the FoV, 0 outside).
 
@@ -443,7 +443,7 @@ class _FieldOfView:
 class DiskFov(_FieldOfView):
     """p_D of a sensor that sees a disk of radius ``radius`` around itself.
 
-    Called as a :data:`.gm_phd.DetectionProbability`, ``p_d(means, covs, sensor)``: with
+    Called as a :data:`.gm_phd.filter.DetectionProbability`, ``p_d(means, covs, sensor)``: with
     ``integrate=True`` (Sung & Tokekar eq. 9-10) ``p_inside`` times the component's mass in
     the disk (:func:`disk_mass`); with ``integrate=False`` p_D at the component's mean,
     ``p_inside`` if the mean is within ``radius`` of the sensor (boundary included), else 0.
@@ -475,7 +475,7 @@ class SquareFov(_FieldOfView):
     """p_D of a sensor that sees an axis-aligned square of side ``side`` centred on itself.
 
     Papaioannou et al.'s sensing area (10 m x 10 m). Called as a
-    :data:`.gm_phd.DetectionProbability`: with ``integrate=True`` ``p_inside`` times the
+    :data:`.gm_phd.filter.DetectionProbability`: with ``integrate=True`` ``p_inside`` times the
     component's mass in the square (:func:`square_mass`); with ``integrate=False``
     ``p_inside`` if the mean is in the (closed) square, else 0.
 

@@ -35,12 +35,12 @@ Conventions and decisions (see also docs/decisions.md):
   Gaussian, so that the simulated data and the filter agree. Clutter has no mass there.
 
 EKF and UKF (:func:`ekf_terms`, :func:`ukf_terms`) produce the per-component
-:class:`.gm_phd.KalmanTerms` that :func:`.gm_phd.update_with_terms` turns into the PHD
-update (Vo & Ma 2006, the extension of the GM-PHD filter to nonlinear Gaussian models by
+:class:`.gm_phd.filter.KalmanTerms` that :func:`.gm_phd.filter.update_with_terms` turns into the
+PHD update (Vo & Ma 2006, the extension of the GM-PHD filter to nonlinear Gaussian models by
 EKF / UKF linearisation, which Papaioannou Sec. VI-A mentions as the alternative to SMC); both are
 vectorised over components and measurements. :class:`RangeBearingMeasurement` bundles the
 sensor, the linearisation and the clutter as the measurement model of
-:class:`.gm_phd_estimator.GmPhdEstimator`.
+:class:`.gm_phd.estimator.GmPhdEstimator`.
 
 References: S. Papaioannou, P. Kolios, T. Theocharides, C. G. Panayiotou, M. M. Polycarpou,
 "A cooperative multi-agent probabilistic framework for search and track missions", IEEE
@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .gm_phd import (
+from .gm_phd.filter import (
     GaussianMixture,
     KalmanTerms,
     UpdateResult,
@@ -209,7 +209,8 @@ def range_bearing_log_likelihood(sensor_model: RangeBearingSensor,
     callable
         ``log_likelihood(z (M, 2), states (N, d), sensor (2,)) -> (M, N)`` [log of
         1/(m rad)]: :meth:`RangeBearingSensor.log_likelihood` at the states' positions
-        (``states[:, position_index]``), in the form :class:`.smc_phd.SmcPhdEstimator` takes.
+        (``states[:, position_index]``), in the form :class:`.smc_phd.filter.SmcPhdEstimator`
+        takes.
     """
     idx = np.asarray(position_index)
 
@@ -507,7 +508,7 @@ def update_range_bearing(mix: GaussianMixture, z: np.ndarray, sensor: np.ndarray
     method : {"ekf", "ukf"}
         Linearisation (:func:`ekf_terms`, :func:`ukf_terms`).
     missed : np.ndarray of bool, shape (J,), optional
-        Components that keep a missed-detection term (:func:`.gm_phd.update_with_terms`).
+        Components that keep a missed-detection term (:func:`.gm_phd.filter.update_with_terms`).
     position_index : tuple of int
         State indices of the target's x and y [m].
     **options
@@ -541,7 +542,7 @@ def update_range_bearing(mix: GaussianMixture, z: np.ndarray, sensor: np.ndarray
 class RangeBearingMeasurement:
     """The range-bearing sensor as a GM-PHD measurement model (``terms``, ``clutter``, ...).
 
-    Fits the ``MeasurementModel`` protocol of :mod:`.gm_phd_estimator`.
+    Fits the ``MeasurementModel`` protocol of :mod:`.gm_phd.estimator`.
 
     Attributes
     ----------

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .checks import check_finite, check_positive_int, check_spd
+from ..checks import check_finite, check_positive_int, check_spd
 
 
 @dataclass

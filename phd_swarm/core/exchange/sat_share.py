@@ -10,7 +10,7 @@ that plan's agents. Exchanging is mutual ("they exchange their search densities 
 a joint search plan"), so a pair exchanges only if the rule allows it on both sides: the
 sender leaves its map out for an agent of its plan, the receiver ignores the map of an
 agent of its own plan. Every map taken is max-merged into the estimator's
-(:meth:`~phd_swarm.core.estimators.papaioannou.PapaioannouEstimator.merge_search`); the
+(:meth:`~phd_swarm.core.estimators.papaioannou.estimator.PapaioannouEstimator.merge_search`); the
 controller reads what came in through :class:`SatView` (its ``view`` hook) and builds the
 joint plan of Alg. 1 with the agents whose maps it received.
 

@@ -2,7 +2,7 @@
 
 :func:`as_points` turns positions (a set of targets or estimates, K x 2 [m]) into a float
 array, refusing anything else with an error that names where it came from; ``[]`` is the
-empty set. Used by OSPA (:mod:`.ospa`) and the reward sets (:mod:`.reward_sets`).
+empty set. Used by OSPA (:mod:`.ospa`) and the reward sets (:mod:`.shirsat.reward_sets`).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from phd_swarm.core.estimators.checks import check_spd
+from phd_swarm.core.checks import check_spd
 from phd_swarm.nodes.convert import InvalidMessage, f64, header, points, u32, xy
 from phd_swarm.nodes.face import Face, Step
 from phd_swarm_msgs.msg import GaussianMixture, TrackSet
@@ -132,7 +132,7 @@ class EstimatorView:
     It has what the hooks read: ``mixture.weights``, ``targets()`` and ``confirmed_mask()``
     (with tracks), ``reward_set()`` (with a reward set). The monitor and the log readers
     compute a system's figures (e.g.
-    :func:`phd_swarm.core.estimators.sung_figures.step_figures`) from a robot's
+    :func:`phd_swarm.core.estimators.sung.figures.step_figures`) from a robot's
     ``components``, ``tracks`` and ``reward_set`` with it, as the in-memory engine does from
     the estimator.
     """

@@ -17,9 +17,9 @@ from phd_swarm.core.controllers.sung_planners import (
     covariance_size,
     setup,
 )
-from phd_swarm.core.estimators.gm_phd import GaussianMixture
+from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture
+from phd_swarm.core.geometry.centroids import next_position
 from phd_swarm.core.geometry.grid import Environment
-from phd_swarm.core.lloyd import next_position
 from phd_swarm.core.system import SystemConfig
 
 RNG = np.random.default_rng(0)

@@ -396,7 +396,7 @@ def test_at_points_for_particles():
 
 
 def test_models_plug_into_the_gm_phd_estimator():
-    from phd_swarm.core.estimators.gm_phd import DetectionProbability  # noqa: F401
+    from phd_swarm.core.estimators.gm_phd.filter import DetectionProbability  # noqa: F401
 
     model = DiskFov(R, 0.9)
     means = np.array([[0.0, 0.0, 1.0, 1.0], [20.0, 0.0, 0.0, 0.0]])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from phd_swarm.core.estimators.gm_phd import GaussianMixture
+from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture
 from phd_swarm.core.estimators.range_bearing import (
     RangeBearingMeasurement,
     RangeBearingSensor,

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from ... import registry
-from ... import search_map as sm
+from ...estimators.papaioannou import search_map as sm
 from ...outputs import Output
 from ...params import ParamSpec
 from ..base import Controller, Decision, Knowledge

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...estimators.checks import check_finite, check_probability
+from ...checks import check_finite, check_probability
 from ...estimators.range_bearing import RangeBearingSensor, clutter_density_square, wrap_angle
 
 __all__ = [

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...search_map import SearchGrid, check_values
+from ...estimators.papaioannou.search_map import SearchGrid, check_values
 
 __all__ = ["TIE_TOLERANCE", "greedy_path", "joint_paths", "search_action", "SearchPlan",
            "random_search_action"]
@@ -100,8 +100,8 @@ def greedy_path(grid_positions: np.ndarray, start_position: np.ndarray,
     start_position : array_like, shape (2,)
         The agent's position s_k [m].
     targets : array_like of int, shape (K,)
-        The nodes to visit, V-bar (e.g. :func:`~phd_swarm.core.search_map.unvisited`);
-        distinct, any order.
+        The nodes to visit, V-bar (e.g.
+        :func:`~phd_swarm.core.estimators.papaioannou.search_map.unvisited`); distinct, any order.
 
     Returns
     -------
@@ -224,7 +224,8 @@ class SearchPlan:
     sensing area. :meth:`advance` takes either that mask or the search values after the
     map's update (eq. 9), in which case a node with value 1 counts as visited: it was
     inside the sensing square now or at the previous step (eq. 7 does not decay it
-    there), or, after a :func:`~phd_swarm.core.search_map.max_merge`, a peer's.
+    there), or, after a :func:`~phd_swarm.core.estimators.papaioannou.search_map.max_merge`, a
+    peer's.
 
     Parameters
     ----------

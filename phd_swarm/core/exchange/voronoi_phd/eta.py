@@ -19,8 +19,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ...estimators.grid_phd.filter import eta_partial, eta_total, psi_pd, update_weights
 from ...geometry.polygons import positions_in_sorted
-from ...phd_grid import eta_partial, eta_total, psi_pd, update_weights
 from ...scan import Scan
 from ..base import Envelope
 from .cells import LocalPartition, NeighbourCells

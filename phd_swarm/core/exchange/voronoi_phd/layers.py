@@ -16,7 +16,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ...cumulative import cumulative_update_counts
+from ...controllers.power_lloyd.cumulative import cumulative_update_counts
 from .context import FilterContext
 
 #: Values of a layer for some bins, as a transfer carries them: (alpha, count), or
@@ -61,7 +61,8 @@ class CumulativeLayer(BinLayer):
 
     Chen eq. 9-10 with one observation per scan whose field of view holds the bin and one
     reward per such scan with a measurement. The scans of a step are counted and applied
-    together at its end (:func:`~phd_swarm.core.cumulative.cumulative_update_counts`,
+    together at its end
+    (:func:`~phd_swarm.core.controllers.power_lloyd.cumulative.cumulative_update_counts`,
     bit-identical to one update per scan since the counts are whole numbers).
 
     Attributes

@@ -17,8 +17,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ...estimators.grid_phd.filter import spread
 from ...geometry.polygons import isin_sorted, polygon_distances
-from ...phd_grid import spread
 from ..base import Envelope
 from .cells import LocalPartition, NeighbourCells
 from .context import FilterContext

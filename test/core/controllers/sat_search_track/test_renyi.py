@@ -34,7 +34,7 @@ from phd_swarm.core.estimators.range_bearing import (
     clutter_density_square,
     range_bearing_log_likelihood,
 )
-from phd_swarm.core.estimators.smc_phd import ParticleSet, update
+from phd_swarm.core.estimators.smc_phd.filter import ParticleSet, update
 
 PAPER = RangeBearingSensor()
 SIDE = 10.0

@@ -20,7 +20,7 @@ from phd_swarm.core.controllers.sat_search_track.search_plan import (
     random_search_action,
     search_action,
 )
-from phd_swarm.core.search_map import (
+from phd_swarm.core.estimators.papaioannou.search_map import (
     SearchGrid,
     initial_values,
     predict,
