@@ -1,13 +1,10 @@
 """The shared machinery names no system: nodes, engines and tools reach parts by declaration.
 
 A system is its own modules (issue 35): its parts under ``core/{sensors,estimators,
-exchange,controllers}``, its ROS faces under ``nodes/faces``. The robot node, the observers, the engines and the generic
-tools must not import those modules nor name a built-in part by string; they read what the
-parts declare (outputs, wires, hooks). Parsed, not imported, like :mod:`test_layers`.
-
-:data:`PENDING` lists the modules that still do, each to be made neutral in a later slice
-of issue 35; a listed module that no longer offends fails the test, so the list only
-shrinks.
+exchange,controllers}``, its ROS faces under ``nodes/faces``. The robot node, the observers,
+the engines and the generic tools must not import those modules nor name a built-in part by
+string; they read what the parts declare (outputs, wires, hooks). Parsed, not imported, like
+:mod:`test_layers`.
 """
 
 from __future__ import annotations
@@ -33,8 +30,6 @@ COMMON_NAMES = {"none"}
 #: Tools that belong to one paper: its tables, fits and studies.
 PAPER_TOOLS = {"fit_gp.py", "renewal.py", "loss_study.py", "sung_tables.py",
                "shirsat_tables.py", "papaioannou_tables.py"}
-#: Modules that still name a system (issue 35: the next slices make them neutral).
-PENDING = {"engines/central.py", "tools/run_log.py"}
 
 PART_NAMES = {n for names in BUILTIN_PARTS.values() for n in names} - COMMON_NAMES
 
@@ -68,10 +63,7 @@ def _rel(p: Path) -> str:
 @pytest.mark.parametrize("path", SHARED_MODULES, ids=_rel)
 def test_shared_modules_name_no_system(path):
     found = offences(path)
-    if _rel(path) in PENDING:
-        assert found, f"{_rel(path)} names no system any more: take it off PENDING"
-    else:
-        assert not found, f"{_rel(path)} names a system: {found}"
+    assert not found, f"{_rel(path)} names a system: {found}"
 
 
 def test_the_check_sees_system_imports_and_part_names():
@@ -82,4 +74,3 @@ def test_the_check_sees_system_imports_and_part_names():
             "def f(c):\n    return c == 'chen_o' or c == 'none'\n")
     assert offences(probe, text) == ["line 1: imports phd_swarm.nodes.faces.voronoi_phd",
                                      "line 5: names part 'chen_o'"]
-    assert all(p.exists() for p in (PACKAGE / m for m in PENDING))

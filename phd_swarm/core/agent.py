@@ -137,15 +137,9 @@ class Agent:
         self.controller = team.make("controller", robot_id)
         self.rng = robot_generator(team.scenario.seed, robot_id)
         # An exchange that carries the estimator's state (Shirsat & Berman's reward sets)
-        # is handed the estimator once.
-        bind = getattr(self.exchange, "bind_estimator", None)
-        if bind is not None:
-            bind(self.estimator)
-        # One that carries the controller's state (Papaioannou et al.'s mode and joint
-        # plan) is handed the controller.
-        bind = getattr(self.exchange, "bind_controller", None)
-        if bind is not None:
-            bind(self.controller)
+        # or the controller's (Papaioannou et al.'s mode and joint plan) keeps them.
+        self.exchange.bind_estimator(self.estimator)
+        self.exchange.bind_controller(self.controller)
         self._view = team.parts["exchange"].view or (lambda exchange: None)
         #: Whether this agent runs the estimator, or the exchange does (Dames' grid PHD).
         self._runs_estimator = not team.parts["estimator"].runs_in_exchange

@@ -87,7 +87,8 @@ HOOKS: dict[str, tuple[str, ...]] = {
     "simulate": ("sensor",), "simulate_labelled": ("sensor",),
     "central": ("estimator",), "runs_in_exchange": ("estimator",),
     "team_step": ("estimator",), "figures": ("estimator", "controller"),
-    "view": ("exchange",), "wire": ("exchange",),
+    "view": ("exchange",), "wire": ("exchange",), "map_layer": ("exchange",),
+    "counters": ("exchange",),
     "power_weight_guard": ("controller",), "results_revision": ROLES,
 }
 
@@ -146,6 +147,15 @@ class Part:
         An exchange's view of a step for the controller (e.g. the robot's cell and bins).
     wire : str
         An exchange's ROS wire, ``"module:NAME"`` (:mod:`phd_swarm.nodes.wire`).
+    map_layer : callable
+        An exchange's per-bin state over the whole map: ``map_layer(scenario, requires)`` ->
+        an object that counts a step's scans (``observe``), gives a cell's values
+        (``of(bins)``, fields of a controller's ``CellDensity``) and an image for the
+        figures (``image()``); the central engine keeps it in place of the robots' own,
+        a log's reader rebuilds it from the scans (Chen's cumulative density).
+    counters : tuple of str
+        An exchange's protocol counters (its robots' ``stats``) that a sweep sums over the
+        team into results.csv.
     power_weight_guard : callable
         A controller's bound on the power weights at the partition (Chen's guard).
     results_revision : int or None
@@ -171,6 +181,8 @@ class Part:
     figures: Callable[..., Any] | None = None
     view: Callable[[Any], Any] | None = None
     wire: str = ""
+    map_layer: Callable[[Any, frozenset[str]], Any] | None = None
+    counters: tuple[str, ...] = ()
     power_weight_guard: Callable[[Any], Any] | None = None
     results_revision: int | None = None
 

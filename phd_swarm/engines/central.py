@@ -11,8 +11,10 @@ eq. 7 when every power weight is 0), and each robot's controller (the same regis
 controller objects and generators the agents have, :mod:`phd_swarm.core.controllers`) on its
 own cell, bins and masses. It runs the systems whose estimator has a central form
 (``grid_phd``) and whose exchange partitions the map (``voronoi_phd``); other systems run on
-the distributed engine. Chen's cumulative state (eq. 9-10) is counted per bin: alpha and n
-are whole numbers, so they are exactly those the robots carry.
+the distributed engine. What the exchange's robots carry per bin besides the PHD, when the
+controller asks for it (Chen's cumulative state, eq. 9-10), is kept over the whole map by
+the exchange's ``map_layer`` hook: its counts are whole numbers, so they are exactly those
+the robots carry.
 
 One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
 
@@ -23,10 +25,11 @@ One step k, as in :class:`~phd_swarm.engines.distributed.DistributedEngine`:
    (:class:`~phd_swarm.core.controllers.base.PowerWeightGuard`, e.g. ``chen_o`` with
    ``rho_cap: nearest_robot``) has it applied to them first, at q^k;
 3. the filter predicts (eq. 3; per cell when the motion kernel is convolved by FFT, see
-   :meth:`CentralEngine._predict_per_cell`) and updates with the sets in increasing robot
-   id (eq. 4-6, Alg. 2 line 10); every scan counts one observation of the bins in its
-   field of view, and a reward there if it holds a measurement (Chen eq. 9-10); each
-   robot decides its goal and next power weight on its own bins;
+   :meth:`~phd_swarm.core.estimators.grid_phd.central.CentralPhdFilter.predict_cells`)
+   and updates with the sets in increasing robot id (eq. 4-6, Alg. 2 line 10); the map
+   layer counts the scans (Chen eq. 9-10: one observation of the bins in a scan's field of
+   view, and a reward there if it holds a measurement); each robot decides its goal and
+   next power weight on its own bins;
 4. the world moves the robots toward their goals and the targets, to step k+1.
 
 What it leaves out is what only the protocol has: messages, failures and the counters of
@@ -43,8 +46,6 @@ import numpy as np
 
 from phd_swarm.core.agent import Team, robot_generator
 from phd_swarm.core.controllers.base import CellDensity, Knowledge
-from phd_swarm.core.controllers.power_lloyd.cumulative import observe_scans
-from phd_swarm.core.estimators.grid_phd import filter as phd_grid
 from phd_swarm.core.geometry.ownership import bin_owners
 from phd_swarm.core.geometry.partition import cell_of
 from phd_swarm.core.scan import Scan
@@ -91,15 +92,12 @@ class CentralEngine:
         self._guard = None if hook is None else hook(team.setups["controller"])
         self._figures = team.parts["controller"].figures
         self._live_rows: list[int] = []
-        self.cumulative = "cumulative" in team.parts["controller"].requires
-        self.alpha = np.zeros(self.grid.size) if self.cumulative else None
-        self.count = np.zeros(self.grid.size, dtype=np.int64) if self.cumulative else None
+        layer = team.parts["exchange"].map_layer
+        #: The exchange's per-bin state over the map (None: it carries none).
+        self.layer = None if layer is None else layer(scenario,
+                                                      team.parts["controller"].requires)
         self.owners = np.empty(0, dtype=np.int64)
         self._generators = (np.empty((0, 2)), np.empty(0))
-        kernel = self.filter.kernel
-        self._per_cell_prediction = kernel.size > phd_grid.DIRECT_MAX_TAPS
-        self._survival = self.filter.ps_img.reshape(-1)
-        self._birth = self.filter.birth_img.reshape(-1)
         self.goals = np.empty((0, 2))
 
     @property
@@ -124,14 +122,10 @@ class CentralEngine:
         self.owners = bin_owners(grid, positions, rho)
         order = np.argsort(self.owners, kind="stable")
         starts = np.searchsorted(self.owners[order], np.arange(len(ids) + 1))
-        if self._per_cell_prediction:
-            self._predict_per_cell(order, starts)
-        else:
-            self.filter.predict()
+        self.filter.predict_cells([order[starts[r]:starts[r + 1]] for r in range(len(ids))])
         self.filter.update_all(ordered)
-        if self.cumulative:
-            observe_scans(grid, self.scenario.models.detection.radius, self.alpha, self.count,
-                          ((scan.sensor, scan.z) for scan in ordered))
+        if self.layer is not None:
+            self.layer.observe((scan.sensor, scan.z) for scan in ordered)
         w = self.filter.weights.reshape(-1)
         goals = {}
         goal_rows = np.empty((len(ids), 2))
@@ -146,8 +140,7 @@ class CentralEngine:
             # The polygon is only needed where the weights of the bins are all 0 (the
             # centroid's fallback): computed then.
             local = CellDensity(grid, partial(self.cell, r), bins, w[bins],
-                                None if self.alpha is None else self.alpha[bins],
-                                None if self.count is None else self.count[bins])
+                                **({} if self.layer is None else self.layer.of(bins)))
             d = self.controllers[r].decide(Knowledge(rid, k, positions[r], scans[rid], local),
                                            self.rngs[r])
             goals[rid] = d.goal
@@ -156,29 +149,6 @@ class CentralEngine:
         self.goals = goal_rows
         world.apply_goals(goals)
         world.advance()
-
-    def _predict_per_cell(self, order: np.ndarray, starts: np.ndarray) -> None:
-        """Eq. 3 as the robots compute it: each cell's bins spread in their own box.
-
-        With a kernel that :func:`~phd_swarm.core.estimators.grid_phd.filter.convolve_mass` applies
-        by FFT (Chen's at 0.1 m), the round-off is ~1e-16 of the largest mass in the convolved
-        box. In a searched-out cell every mass can lie below the round-off of a whole-map
-        FFT, and the centroid of that cell would follow it; the robots convolve their own
-        bins only (:func:`~phd_swarm.core.estimators.grid_phd.filter.spread`), so their round-off
-        is that of their own masses. Spreading each cell's bins the same way keeps the two engines'
-        robots together (test/engines/test_central.py). Sums are the same up to the
-        order of the additions.
-        """
-        grid, kernel = self.grid, self.filter.kernel
-        w = self.filter.weights.reshape(-1)
-        out = np.zeros(grid.size)
-        for r in range(len(starts) - 1):
-            bins = order[starts[r]:starts[r + 1]]
-            if bins.size:
-                flat, moved = phd_grid.spread(grid, bins, self._survival[bins] * w[bins],
-                                              kernel)
-                out[flat] += moved
-        self.filter.weights = (out + self._birth).reshape(grid.shape)
 
     def cell(self, row: int) -> np.ndarray:
         """The cell polygon (V, 2) of the robot in ``row`` at the last step.

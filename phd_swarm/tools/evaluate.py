@@ -308,7 +308,7 @@ def main(argv: list[str] | None = None) -> int:
             written.append(save_figures(rows, out / "figures.png", title=title))
         # A controller that steers by the cumulative density (Chen's O) shows it by default.
         show_cum = args.cumulative or "cumulative" in s.system.parts()["controller"].requires
-        cum = run.cumulative_images(set(snaps) | set(anim)) if show_cum else {}
+        cum = run.map_layer_images(set(snaps) | set(anim)) if show_cum else {}
         paths = None if run.grid_phd else run.paths()
         for k in snaps:
             if k in kept:

@@ -46,7 +46,6 @@ import yaml
 from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
-from phd_swarm.core.controllers.power_lloyd.cumulative import cumulative_weight, observe_scans
 from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
@@ -295,31 +294,33 @@ class RunLog:
         later = self.steps.get(k + 1)
         return reporters(self.steps[k].alive, None if later is None else later.alive)
 
-    def cumulative_images(self, steps: Iterable[int], mode: str | None = None
-                          ) -> dict[int, np.ndarray]:
-        """Chen's cumulative density wc (eq. 9-11) over the map after each of ``steps``.
+    def map_layer_images(self, steps: Iterable[int]) -> dict[int, np.ndarray]:
+        """The exchange's map layer as an image after each of ``steps`` (none: empty).
 
-        Rebuilt from the scans in the log: every scan of step k adds one observation to
-        each bin of its field of view (Grid.disk_bins of the sensor position and detection
-        radius) and one reward if it holds a measurement; the counts are integers, so the
-        order of the scans does not matter and the team state is the union of the robots'.
-        ``mode`` defaults to the system's ``cumulative_mode`` option (``rate`` if its
-        controller has none).
+        Rebuilt from the scans in the log by the exchange's ``map_layer`` hook, with every
+        layer the exchange can carry (Chen's cumulative density wc, eq. 9-11, for
+        ``voronoi_phd``: every scan of step k adds one observation to each bin of its
+        field of view and one reward if it holds a measurement; the counts are integers,
+        so the order of the scans does not matter and the team state is the union of the
+        robots').
         """
-        grid = self.scenario.grid
-        radius = self.scenario.models.detection.radius
-        mode = mode or dict(self.scenario.system.options).get("cumulative_mode", "rate")
+        exchange = self.scenario.system.parts()["exchange"]
+        layer = None if exchange.map_layer is None else exchange.map_layer(
+            self.scenario, exchange.provides)
         wanted = sorted(set(steps))
-        alpha = np.zeros(grid.size)
-        count = np.zeros(grid.size, dtype=np.int64)
         out: dict[int, np.ndarray] = {}
+        if layer is None or not wanted:
+            return out
         for k in sorted(self.steps):
-            if not wanted or k > wanted[-1]:
+            if k > wanted[-1]:
                 break
             scans = self.steps[k].scans
-            observe_scans(grid, radius, alpha, count, (scans[rid] for rid in sorted(scans)))
+            layer.observe(scans[rid] for rid in sorted(scans))
             if k in wanted:
-                out[k] = cumulative_weight(alpha, count, mode).reshape(grid.shape)
+                image = layer.image()
+                if image is None:
+                    return {}
+                out[k] = image
         return out
 
 

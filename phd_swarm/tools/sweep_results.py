@@ -17,21 +17,33 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.config.sweep_spec import SpecError
+from phd_swarm.core import registry
+
+
+def declared_counters() -> tuple[str, ...]:
+    """The protocol counters the built-in exchanges declare (their parts' ``counters``).
+
+    In the order the exchanges (by name) declare them, each once: the columns a sweep sums
+    over the team into results.csv (``voronoi_phd``'s: a missed neighbour and what it cost,
+    peers declared dead by a timeout and the bins lost with them). A plugin's exchange keeps
+    its counters in its robots' ``stats``; they are not columns.
+    """
+    out: list[str] = []
+    for name in sorted(registry.BUILTIN_PARTS["exchange"]):
+        out += [c for c in registry.lookup("exchange", name).counters if c not in out]
+    return tuple(out)
+
+
+#: Robot protocol counters summed over the team into results.csv (:func:`declared_counters`).
+PROTOCOL_COLUMNS = declared_counters()
 
 #: Columns of results.csv, in order.
 COLUMNS = ("spec", "trial", "method", "controller", "engine", "robots", "targets",
            "resolution", "seed", "trial_index", "steps", "duration_s", "metric", "value",
            "ospa_final", "ospa_mean_window", "ospa_median_window", "window_start_s",
            "window_end_s", "cardinality_true_final", "cardinality_est_final",
-           "expected_cardinality_final", "cardinality_true_mean_window", "cell_mismatch",
-           "misrouted_bins", "unroutable_bins", "duplicate_bins", "orphan_bins", "timeouts",
-           "lost_to_dead", "wall_s", "cpu_s", "config_hash")
-
-#: Robot protocol counters summed over the team into results.csv (see
-#: :mod:`phd_swarm.core.exchange.voronoi_phd.participant`): a missed neighbour and what it
-#: cost, peers declared dead by a timeout and the bins lost with them.
-PROTOCOL_COLUMNS = ("cell_mismatch", "misrouted_bins", "unroutable_bins", "duplicate_bins",
-                    "orphan_bins", "timeouts", "lost_to_dead")
+           "expected_cardinality_final", "cardinality_true_mean_window", *PROTOCOL_COLUMNS,
+           "wall_s", "cpu_s", "config_hash")
 
 #: Columns that differ between two runs of the same trial (timings).
 TIMING_COLUMNS = ("wall_s", "cpu_s")

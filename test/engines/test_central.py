@@ -57,8 +57,8 @@ def test_central_engine_follows_the_distributed_one(name):
             assert np.array_equal(robot.bins, np.flatnonzero(cent.owners == r)), (k, rid)
             if robot.alpha is not None:
                 # Chen eq. 9-10: whole numbers, so exactly equal.
-                assert np.array_equal(robot.alpha, cent.alpha[robot.bins]), (k, rid)
-                assert np.array_equal(robot.count, cent.count[robot.bins]), (k, rid)
+                assert np.array_equal(robot.alpha, cent.layer.alpha[robot.bins]), (k, rid)
+                assert np.array_equal(robot.count, cent.layer.count[robot.bins]), (k, rid)
             assert dist.power_weights[rid] == pytest.approx(cent.power_weights[r],
                                                             rel=1e-9, abs=1e-12)
         moved += float(np.abs(cent.world.robot_positions - before).max())

@@ -234,7 +234,7 @@ def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp
 
     run = load_run(chen_run / "run.mcap")
     assert run.controller == "chen_o" and len(run.steps) == 12
-    rebuilt = run.cumulative_images([5, 11])
+    rebuilt = run.map_layer_images([5, 11])
 
     # The in-memory engine computes what the ROS robots computed (proven bit for bit in
     # test_team_inprocess); its robots' own cumulative state is the reference.

@@ -481,3 +481,13 @@ def test_a_sung_sweep_scores_its_own_estimates_and_saves_the_papers_figures(tmp_
         assert {"components", "tracks", "mahal_closest", "largest_variance"} <= set(s)
         assert np.nanmax(s["tracks"]) > 0 and np.all(s["ospa"] <= 100.0)
         assert float(r["ospa_mean_window"]) == pytest.approx(float(np.mean(s["ospa"])))
+
+
+def test_the_protocol_columns_are_the_exchanges_declared_counters():
+    from phd_swarm.core import registry
+
+    voronoi = registry.lookup("exchange", "voronoi_phd").counters
+    assert sweep_results.PROTOCOL_COLUMNS == voronoi and "timeouts" in voronoi
+    # The schema of the stored sweeps is unchanged by the declaration.
+    stored = (ROOT / "results" / "sweeps" / "dames_static" / "results.csv").open().readline()
+    assert tuple(stored.strip().split(",")) == sweep_results.COLUMNS

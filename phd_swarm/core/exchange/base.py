@@ -6,8 +6,9 @@ a tick for every round (tick period) without news, and sends the :class:`Envelop
 returns; the in-memory engine delivers them through a queue, the ROS robot node publishes
 them on the receivers' inbox topics (:mod:`phd_swarm.nodes.wire`). A robot's exchange is
 done with a step when :attr:`Exchange.done`. An exchange that carries the estimator's own
-state (Shirsat & Berman's reward sets) has a ``bind_estimator(estimator)`` method, which
-the agent calls once with the robot's estimator.
+state (Shirsat & Berman's reward sets) or the controller's (Papaioannou et al.'s modes and
+plans) overrides :meth:`Exchange.bind_estimator` or :meth:`Exchange.bind_controller`, which
+the agent calls once with the robot's own.
 """
 
 from __future__ import annotations
@@ -91,3 +92,9 @@ class Exchange(ABC):
     @abstractmethod
     def step(self) -> int:
         """The current (or last) step."""
+
+    def bind_estimator(self, estimator: Any) -> None:  # noqa: B027 (a hook, empty by default)
+        """Be handed the robot's estimator once, to carry its state (default: ignore it)."""
+
+    def bind_controller(self, controller: Any) -> None:  # noqa: B027 (a hook, empty by default)
+        """Be handed the robot's controller once, to carry its state (default: ignore it)."""

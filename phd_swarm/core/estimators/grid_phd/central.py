@@ -7,7 +7,7 @@ single-sensor updates (eq. 4-6), applied in increasing robot id (Alg. 2 line 10)
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -80,6 +80,34 @@ class CentralPhdFilter(Estimator):
     def predict(self) -> None:
         """Prediction step (eq. 3): survival, motion (mass leaving E is lost), birth."""
         self._w = phd_grid.predict_image(self._w, self.kernel, self.ps_img, self.birth_img)
+
+    def predict_cells(self, cells: Sequence[np.ndarray]) -> None:
+        """Eq. 3 as the robots compute it, when the motion is convolved by FFT.
+
+        ``cells`` are the flat bins of each robot's cell (a partition of the map). With a
+        kernel that :func:`~.filter.convolve_mass` applies by FFT (more than
+        :data:`~.filter.DIRECT_MAX_TAPS` taps, Chen's at 0.1 m), the round-off is ~1e-16 of
+        the largest mass in the convolved box. In a searched-out cell every mass can lie
+        below the round-off of a whole-map FFT, and the centroid of that cell would follow
+        it; the robots convolve their own bins only (:func:`~.filter.spread`), so their
+        round-off is that of their own masses. Spreading each cell's bins the same way keeps
+        the central engine's robots with the distributed ones
+        (test/engines/test_central.py); sums are the same up to the order of the additions.
+        With a direct kernel this is :meth:`predict`.
+        """
+        if self.kernel.size <= phd_grid.DIRECT_MAX_TAPS:
+            self.predict()
+            return
+        grid = self.grid
+        w = self._w.reshape(-1)
+        survival = self.ps_img.reshape(-1)
+        out = np.zeros(grid.size)
+        for bins in cells:
+            if bins.size:
+                flat, moved = phd_grid.spread(grid, bins, survival[bins] * w[bins],
+                                              self.kernel)
+                out[flat] += moved
+        self._w = (out + self.birth_img.reshape(-1)).reshape(grid.shape)
 
     def update(self, scan: Scan) -> None:
         """Update with one measurement set (eq. 4-6)."""

@@ -8,15 +8,25 @@ bins each scan saw (:meth:`BinLayer.observe`) and closes the step (:meth:`BinLay
 The plain PHD filter (Dames 2020) carries nothing (:class:`BinLayer`); Chen's "O" method
 carries alpha and n per bin (:class:`CumulativeLayer`). :func:`layer_for` picks the layer of
 a :class:`~.context.FilterContext`.
+
+The same layers over the whole map (:class:`MapLayer`, :class:`CumulativeMapLayer`) are what
+the central engine keeps in place of the robots' own, and what a log's reader rebuilds from
+the recorded scans for the figures: the part's ``map_layer`` hook (:func:`map_layer`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
-from ...controllers.power_lloyd.cumulative import cumulative_update_counts
+from ...controllers.power_lloyd.cumulative import (
+    cumulative_update_counts,
+    cumulative_weight,
+    observe_scans,
+)
+from ...geometry.grid import Grid
 from .context import FilterContext
 
 #: Values of a layer for some bins, as a transfer carries them: (alpha, count), or
@@ -128,3 +138,64 @@ def layer_for(ctx: FilterContext) -> BinLayer:
 
 
 __all__ = ["BinLayer", "CumulativeLayer", "Parcel", "layer_for"]
+
+
+class MapLayer:
+    """The per-bin layer kept over the whole map: none (Dames 2020), for the central engine.
+
+    What :class:`BinLayer` is to one robot's own bins, this is to every bin of the map at
+    once: the central engine (:mod:`phd_swarm.engines.central`) counts the scans into it
+    and gives each robot the values of its bins; a log's reader rebuilds it from the
+    recorded scans (:func:`map_layer`).
+    """
+
+    def observe(self, scans: Iterable[tuple[np.ndarray, np.ndarray]]) -> None:
+        """Count the scans ``(sensor (2,), z (M, 2))`` of a step."""
+
+    def of(self, bins: np.ndarray) -> dict[str, np.ndarray]:
+        """The layer's values of ``bins``, as fields of a controller's ``CellDensity``."""
+        return {}
+
+    def image(self) -> np.ndarray | None:
+        """The layer as an image (ny, nx) for the figures; None if it has none."""
+        return None
+
+
+class CumulativeMapLayer(MapLayer):
+    """Chen's cumulative state over the whole map: alpha and n per bin (Chen eq. 9-10).
+
+    The counts are whole numbers, so they are exactly those the robots' own
+    :class:`CumulativeLayer` carry, whatever the order of the scans. :meth:`image` is the
+    cumulative density wc of eq. 11 in the reading ``mode``
+    (:func:`~phd_swarm.core.controllers.power_lloyd.cumulative.cumulative_weight`).
+    """
+
+    def __init__(self, grid: Grid, radius: float, mode: str) -> None:
+        self.grid, self.radius, self.mode = grid, radius, mode
+        self.alpha = np.zeros(grid.size)
+        self.count = np.zeros(grid.size, dtype=np.int64)
+
+    def observe(self, scans: Iterable[tuple[np.ndarray, np.ndarray]]) -> None:
+        """Count one observation per scan of each bin in view, and a reward with a measurement."""
+        observe_scans(self.grid, self.radius, self.alpha, self.count, scans)
+
+    def of(self, bins: np.ndarray) -> dict[str, np.ndarray]:
+        """The rewards (``alpha``) and observations (``count``) of ``bins``."""
+        return {"alpha": self.alpha[bins], "count": self.count[bins]}
+
+    def image(self) -> np.ndarray:
+        """The cumulative density wc (eq. 11) as an image (ny, nx)."""
+        return cumulative_weight(self.alpha, self.count, self.mode).reshape(self.grid.shape)
+
+
+def map_layer(scenario: Any, requires: frozenset[str]) -> MapLayer:
+    """The exchange's ``map_layer`` hook: the whole-map layer that ``requires`` asks for.
+
+    ``requires`` is what the controller needs (the central engine) or everything the
+    exchange can carry (a log's figures): Chen's cumulative state if it holds
+    ``cumulative``, else none.
+    """
+    if "cumulative" not in requires:
+        return MapLayer()
+    mode = dict(scenario.system.options).get("cumulative_mode", "rate")
+    return CumulativeMapLayer(scenario.grid, scenario.models.detection.radius, mode)

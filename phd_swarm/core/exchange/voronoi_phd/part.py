@@ -15,6 +15,7 @@ from ... import registry
 from ...controllers.base import CellDensity
 from ...outputs import Output
 from .context import TIMEOUT_TICKS, FilterContext
+from .layers import map_layer
 from .participant import Participant
 
 
@@ -37,6 +38,12 @@ def view(participant: Participant) -> CellDensity:
                        participant.weights, participant.alpha, participant.count)
 
 
+#: The participant's counters (:attr:`.participant.Participant.stats`) that a sweep sums over
+#: the team into results.csv: a missed neighbour and what it cost, peers declared dead by a
+#: timeout and the bins lost with them (docs/protocol.md).
+COUNTERS = ("cell_mismatch", "misrouted_bins", "unroutable_bins", "duplicate_bins",
+            "orphan_bins", "timeouts", "lost_to_dead")
+
 #: The robot's own cell of the step, for observers.
 CELL = Output(
     "cell", "phd_swarm_msgs/msg/CellPolygon", "phd_swarm.nodes.faces.voronoi_phd:CELL",
@@ -48,4 +55,4 @@ registry.register(
     description="Voronoi/power-cell hand-over, phantom prediction and eta partial sums "
                 "(Dames 2020 Alg. 1-2), plus Chen's cumulative layer when asked.",
     provides=("cell", "cumulative"), requires=("grid_density",), outputs=(CELL,), view=view,
-    wire="phd_swarm.nodes.faces.voronoi_phd:WIRE")
+    wire="phd_swarm.nodes.faces.voronoi_phd:WIRE", map_layer=map_layer, counters=COUNTERS)

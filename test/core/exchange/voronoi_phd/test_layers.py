@@ -58,3 +58,24 @@ def test_the_layer_goes_with_the_bins_and_orphans_start_unobserved():
     layer.take_over(4, [(np.array([0, 3]), kept), (np.array([1]), (None, None))])
     np.testing.assert_array_equal(layer.alpha, [1.0, 0.0, 0.0, 1.0])
     np.testing.assert_array_equal(layer.count, [1.0, 0.0, 0.0, 1.0])
+
+
+def test_the_map_layer_is_asked_for_by_the_controller():
+    from phd_swarm.config import load_run_config
+    from phd_swarm.core.exchange.voronoi_phd.layers import CumulativeMapLayer, MapLayer, map_layer
+
+    scenario = load_run_config("config/chen_clustered.yaml").scenario
+    plain = map_layer(scenario, frozenset({"cell"}))
+    assert type(plain) is MapLayer and plain.of(np.arange(3)) == {} and plain.image() is None
+    layer = map_layer(scenario, frozenset({"cell", "cumulative"}))
+    assert isinstance(layer, CumulativeMapLayer) and layer.mode == "rate"
+    # Chen eq. 9-10 over the map: one scan with a measurement, one without, overlapping.
+    grid, radius = scenario.grid, scenario.models.detection.radius
+    a, b = np.array([20.0, 20.0]), np.array([24.0, 20.0])
+    layer.observe([(a, np.array([[20.0, 21.0]])), (b, np.empty((0, 2)))])
+    both = np.intersect1d(grid.disk_bins(a, radius), grid.disk_bins(b, radius))
+    only_b = np.setdiff1d(grid.disk_bins(b, radius), grid.disk_bins(a, radius))
+    cell = layer.of(np.concatenate([both, only_b]))
+    np.testing.assert_array_equal(cell["count"], [2] * both.size + [1] * only_b.size)
+    np.testing.assert_array_equal(cell["alpha"], [1.0] * both.size + [0.0] * only_b.size)
+    assert layer.image().shape == grid.shape
