@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from phd_swarm.core.agent import Team
+from phd_swarm.core.controllers.base import Decision
 from phd_swarm.core.exchange.base import ENGINE_TIMEOUT_TICKS, Envelope
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
 from phd_swarm.core.scan import Scan
@@ -141,6 +142,8 @@ class DistributedEngine:
         self._rng = None if delivery_seed is None else np.random.default_rng(delivery_seed)
         self.traffic: list[StepTraffic] = []
         self.last_scans: dict[int, np.ndarray] = {}
+        #: Each live robot's decision at the last step (goal and power weight).
+        self.decisions: dict[int, Decision] = {}
         self.faults = faults
         self.links = None if faults is None else {
             int(i): FaultyLink.for_sender(faults, int(i)) for i in ids}
@@ -239,7 +242,8 @@ class DistributedEngine:
         else:
             self._deliver_lossy(queue, traffic)
         self.traffic.append(traffic)
-        goals = {rid: self.agents[rid].finish_step().goal for rid in self.live_ids()}
+        self.decisions = {rid: self.agents[rid].finish_step() for rid in self.live_ids()}
+        goals = {rid: d.goal for rid, d in self.decisions.items()}
         self.last_scans = scans
         if self.central is not None:
             self.central.step([Scan(rid, k, positions[rid], scans[rid])

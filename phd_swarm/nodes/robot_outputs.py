@@ -30,6 +30,20 @@ from phd_swarm.nodes.topics import declared_outputs
 from phd_swarm_msgs.msg import TargetSet
 
 
+def robot_estimates(agent: Agent) -> tuple[np.ndarray, float]:
+    """The robot's estimates (N, 2) [m] and expected count, as its ``estimates`` topic has them.
+
+    The estimator's own, or, for an estimator whose PHD the exchange keeps on the robot's
+    owned bins (capability ``grid_density``), those of the owned bins.
+    """
+    ex, est = agent.exchange, agent.estimator
+    if "grid_density" in agent.team.parts["estimator"].provides:
+        points, expected = est.estimates(ex.bins, ex.weights), est.expected_count(ex.weights)
+    else:
+        points, expected = est.estimates(), est.expected_count()
+    return np.asarray(points, dtype=float).reshape(-1, 2), float(expected)
+
+
 class RobotOutputs:
     """The step outputs of one robot node (see the module docstring).
 
@@ -67,12 +81,7 @@ class RobotOutputs:
 
     def publish(self, k: int, decision: Decision) -> None:
         """Publish step ``k``'s outputs (all but the goal and the status)."""
-        ex, est = self.agent.exchange, self.agent.estimator
-        if self.grid_estimator:
-            points, expected = est.estimates(ex.bins, ex.weights), est.expected_count(ex.weights)
-        else:
-            points, expected = est.estimates(), est.expected_count()
-        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        points, expected = robot_estimates(self.agent)
         self.estimates_pub.publish(convert.target_set(
             self.robot_id, k, np.arange(len(points)), points, expected, self.dt,
             self.frame_id))

@@ -221,11 +221,9 @@ def test_bad_files_give_clear_errors(recorded_run, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def chen_run(tmp_path_factory, record_swarm) -> Path:
+def chen_run(system_run) -> Path:
     """A short recorded run of Chen's O method (4 robots, 1 m grid, 12 steps)."""
-    return record_swarm(tmp_path_factory.mktemp("chen"), "chen_clustered.yaml",
-                        "--robots", "4", "--duration", "6", "--seed", "2",
-                        "--controller", "chen_o")
+    return system_run("chen_o")
 
 
 def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp_path):
@@ -237,7 +235,7 @@ def test_cumulative_density_rebuilt_from_the_log_equals_the_robots(chen_run, tmp
     rebuilt = run.map_layer_images([5, 11])
 
     # The in-memory engine computes what the ROS robots computed (proven bit for bit in
-    # test_team_inprocess); its robots' own cumulative state is the reference.
+    # test_systems_inprocess); its robots' own cumulative state is the reference.
     engine = DistributedEngine(run.scenario, "chen_o")
     grid = run.scenario.grid
     for k in range(12):

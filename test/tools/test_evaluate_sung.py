@@ -126,7 +126,7 @@ def test_evaluation_reproduces_the_in_memory_engine(sung_run, evaluated):
     """The figures and scores from the log are the engine's, bit for bit.
 
     The in-memory engine computes what the ROS robot computed (proven bit for bit in
-    test/nodes/test_sung_inprocess.py), on the run's own scenario from the log's config.
+    test/nodes/test_systems_inprocess.py), on the run's own scenario from the log's config.
     """
     from phd_swarm.engines.distributed import DistributedEngine
 
