@@ -36,6 +36,7 @@ import yaml
 from phd_swarm.config.node_params import NODES, SHARED, ParamSpec
 from phd_swarm.core.params import expect_mapping
 from phd_swarm.core.system import SystemConfig
+from phd_swarm.sim.presets import preset_of_kind
 from phd_swarm.sim.scenario import Scenario
 from phd_swarm.sim.scenario_dict import scenario_from_dict
 
@@ -65,7 +66,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
             return [plain(v) for v in value]
         return value
 
-    out: dict[str, Any] = {"preset": _PRESET_OF_KIND[scenario.targets.kind]}
+    out: dict[str, Any] = {"preset": preset_of_kind()[scenario.targets.kind]}
     for f in dataclasses.fields(scenario):
         value = plain(getattr(scenario, f.name))
         if value is None:  # an optional field left unset (robot_start_grid)
@@ -74,11 +75,6 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
             value = {k: v for k, v in value.items() if v is not None and v != []}
         out[f.name] = value
     return out
-
-
-_PRESET_OF_KIND = {"static": "dames_static", "dames_walk": "dames_moving",
-                   "clustered_walk": "chen_clustered", "turning_walk": "sung_tokekar",
-                   "ncv": "papaioannou"}
 
 
 def flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -15,12 +15,10 @@ ends). Two sources:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.world import World
 
 __all__ = ["alive_steps", "in_area_lifetimes"]
 
@@ -55,8 +53,6 @@ def in_area_lifetimes(scenario: Scenario) -> np.ndarray:
     ``scenario.steps`` times; a target never in the truth during the run is not counted.
     Multiply by ``scenario.dt`` for seconds.
     """
-    from phd_swarm.sim.world import World
-
     world = World(scenario)
     seen: dict[int, int] = {}
     for _ in range(scenario.steps):

@@ -30,6 +30,10 @@ With ``birth_spread`` S > 0 [s] the birth step is uniform over the steps b < S/d
 ``b + L <= steps``; with S = 0 every target is born at step 0. A target is in the truth at
 steps b .. b + L - 1. Ids are the targets' indices. :meth:`NcvPaths.step` draws nothing.
 
+The target kind ``ncv`` is registered here (:mod:`phd_swarm.sim.target_kinds`): its
+``targets.lifetime_model`` chooses between :class:`~phd_swarm.sim.ncv_targets.NcvTargets`
+(``cut``) and :class:`NcvPaths`.
+
 Reference: S. Papaioannou et al., "A cooperative multi-agent probabilistic framework for
 search and track missions", IEEE T-CNS, Sec. VI-A/B.
 """
@@ -37,17 +41,16 @@ search and track missions", IEEE T-CNS, Sec. VI-A/B.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.sim.ncv_targets import NcvTargets, ncv_matrices
+from phd_swarm.sim.target_kinds import TargetKind, TargetSetting, register
 
-if TYPE_CHECKING:
-    from phd_swarm.sim.scenario import Scenario
+__all__ = ["LIFETIME_MODELS", "TRIES", "NcvPaths", "truncated_geometric_p"]
 
-__all__ = ["LIFETIME_MODELS", "TRIES", "NcvPaths", "make_ncv_targets", "truncated_geometric_p"]
+Box = tuple[float, float, float, float]
 
 #: How a target's life is bounded: ``cut`` (:class:`~phd_swarm.sim.ncv_targets.NcvTargets`:
 #: a geometric lifetime cut by leaving E and by the run's end), ``contained`` or ``exit``.
@@ -274,20 +277,32 @@ class NcvPaths:
         self._step += 1
 
 
-def make_ncv_targets(rng: np.random.Generator, scenario: Scenario) -> NcvTargets | NcvPaths:
-    """The ``ncv`` targets of ``scenario`` (its ``targets`` config) by its lifetime model.
+def _make_ncv(rng: np.random.Generator, scenario: TargetSetting, *, count: int,
+              draw_box: Box | None, speed: float, spawn: str, lifetime_mean: float,
+              birth_spread: float, process_noise: float, noise_form: str,
+              lifetime_model: str) -> NcvTargets | NcvPaths:
+    """The ``ncv`` targets by their lifetime model.
 
     ``cut`` -> :meth:`NcvTargets.sample <phd_swarm.sim.ncv_targets.NcvTargets.sample>`,
     ``contained`` and ``exit`` -> :meth:`NcvPaths.sample` over the run's steps.
     """
-    cfg = scenario.targets
-    if cfg.lifetime_model != "cut":
-        return NcvPaths.sample(rng, scenario.env, cfg.count, scenario.dt, scenario.steps,
-                               model=cfg.lifetime_model, draw_box=cfg.draw_box,
-                               speed=cfg.speed, lifetime_mean=cfg.lifetime_mean,
-                               birth_spread=cfg.birth_spread, q=cfg.process_noise,
-                               noise_form=cfg.noise_form)
-    return NcvTargets.sample(rng, scenario.env, cfg.count, scenario.dt, spawn=cfg.spawn,
-                             draw_box=cfg.draw_box, speed=cfg.speed,
-                             lifetime_mean=cfg.lifetime_mean, birth_spread=cfg.birth_spread,
-                             q=cfg.process_noise, noise_form=cfg.noise_form)
+    if lifetime_model != "cut":
+        return NcvPaths.sample(rng, scenario.env, count, scenario.dt, scenario.steps,
+                               model=lifetime_model, draw_box=draw_box, speed=speed,
+                               lifetime_mean=lifetime_mean, birth_spread=birth_spread,
+                               q=process_noise, noise_form=noise_form)
+    return NcvTargets.sample(rng, scenario.env, count, scenario.dt, spawn=spawn,
+                             draw_box=draw_box, speed=speed, lifetime_mean=lifetime_mean,
+                             birth_spread=birth_spread, q=process_noise, noise_form=noise_form)
+
+
+def _check_ncv(scenario: TargetSetting, *, spawn: str, lifetime_model: str) -> None:
+    if lifetime_model != "cut" and spawn != "uniform":
+        raise ValueError(f"targets.lifetime_model: {lifetime_model} places whole paths in the "
+                         f"area and needs spawn: uniform")
+
+
+register(TargetKind(
+    name="ncv", make=_make_ncv,
+    description="Papaioannou et al. VI: nearly constant velocity, births and deaths",
+    check=_check_ncv))

@@ -5,6 +5,11 @@ the robot team, the true target population (:class:`TargetConfig`), the extracti
 threshold, the OSPA parameters and the seed. The papers' settings are presets
 (:mod:`phd_swarm.sim.presets`); :func:`phd_swarm.sim.scenario_dict.scenario_from_dict`
 builds a scenario from a nested mapping (a YAML file) by overriding a preset.
+
+The target config is one flat dataclass over every kind (``scenario.targets.<field>``);
+each kind (:mod:`phd_swarm.sim.target_kinds`) reads its own fields and checks them against
+the run when the scenario is built. This module imports the kinds (through
+:mod:`phd_swarm.sim.targets`), never the world: the world and the presets import it.
 """
 
 from __future__ import annotations
@@ -29,16 +34,21 @@ from phd_swarm.core.params import (
     expect_str,
 )
 from phd_swarm.core.system import SystemConfig
+from phd_swarm.sim.dames_targets import BIRTH_HEADINGS
 from phd_swarm.sim.ncv_paths import LIFETIME_MODELS
 from phd_swarm.sim.ncv_targets import NOISE_FORMS, SPAWNS
-from phd_swarm.sim.targets import BIRTH_HEADINGS, substeps_per_step
+from phd_swarm.sim.target_checks import check_inside
+from phd_swarm.sim.target_kinds import lookup, names
+from phd_swarm.sim.targets import TARGET_KINDS, make_targets
 
 #: Side of the extraction window [m]: Dames' 3 x 3 bins of 1 m (Sec. IV).
 EXTRACTION_WINDOW_M = 3.0
 
 Box = tuple[float, float, float, float]
 
-TARGET_KINDS = ("static", "dames_walk", "clustered_walk", "turning_walk", "ncv")
+#: Order of the child streams the world spawns from the scenario's seed
+#: (:class:`phd_swarm.sim.world.World`).
+STREAMS = ("robot_starts", "targets", "sensor")
 
 #: The Dames and Chen map: a 100 x 100 m open square.
 MAP_100 = Environment(0.0, 0.0, 100.0, 100.0)
@@ -51,22 +61,21 @@ _boxes = partial(expect_list, item=expect_box)
 _counts = partial(expect_list, item=partial(expect_int, low=0))
 
 
-def _box_inside(name: str, box: Box, env: Environment) -> None:
-    if not (box[0] >= env.xmin and box[1] >= env.ymin and box[2] <= env.xmax
-            and box[3] <= env.ymax):
-        raise ValueError(f"{name} {box} must lie inside the environment "
-                         f"({env.xmin}, {env.ymin}, {env.xmax}, {env.ymax})")
-
-
 @dataclass(frozen=True)
 class TargetConfig:
     """The true target population of a run (see :mod:`phd_swarm.sim.targets`).
 
+    One flat set of fields over every kind: the config keys and ROS parameters
+    (``scenario.targets.<field>``) and the stored results' hashes are spelled from it, and
+    each kind reads its own fields (:attr:`~phd_swarm.sim.target_kinds.TargetKind.fields`).
+    Each field is checked here on its own; the kind checks its fields together and against
+    the run when the :class:`Scenario` is built.
+
     Attributes
     ----------
-    kind : {"static", "dames_walk", "clustered_walk", "turning_walk"}
-        ``static``: Dames Sec. IV-A; ``dames_walk``: Dames Sec. IV-B; ``clustered_walk``:
-        Chen Sec. 4; ``turning_walk``: Sung & Tokekar Sec. VI-A.4.
+    kind : str
+        A registered target kind (:data:`TARGET_KINDS`; :mod:`phd_swarm.sim.targets` lists
+        the built-in ones with their papers).
     count : int
         Targets drawn (``static``: before those outside E are discarded), the initial number
         (``dames_walk``), or the total ``sum(per_cluster)`` (``clustered_walk``).
@@ -145,14 +154,12 @@ class TargetConfig:
     lifetime_model: str = "cut"
 
     def __post_init__(self) -> None:
-        expect_str(self.kind, "targets.kind", choices=TARGET_KINDS)
+        expect_str(self.kind, "targets.kind", choices=names())
         if self.layout_seed is not None:
             expect_int(self.layout_seed, "targets.layout_seed", low=0)
         expect_int(self.count, "targets.count", low=0)
         if self.draw_box is not None:
             object.__setattr__(self, "draw_box", expect_box(self.draw_box, "targets.draw_box"))
-        elif self.kind == "static":
-            raise ValueError("targets.draw_box is required for static targets")
         expect_number(self.speed, "targets.speed", low=0.0)
         expect_number(self.heading_sd, "targets.heading_sd", low=0.0)
         expect_number(self.heading_rate, "targets.heading_rate", low=0.0, strict=True)
@@ -167,20 +174,8 @@ class TargetConfig:
         expect_number(self.process_noise, "targets.process_noise", low=0.0)
         expect_str(self.noise_form, "targets.noise_form", choices=NOISE_FORMS)
         expect_str(self.lifetime_model, "targets.lifetime_model", choices=LIFETIME_MODELS)
-        if self.lifetime_model != "cut" and self.spawn != "uniform":
-            raise ValueError(f"targets.lifetime_model: {self.lifetime_model} places whole "
-                             f"paths in the area and needs spawn: uniform")
-        clusters = _boxes(self.clusters, "targets.clusters")
-        object.__setattr__(self, "clusters", clusters)
-        per = _counts(self.per_cluster, "targets.per_cluster")
-        object.__setattr__(self, "per_cluster", per)
-        if self.kind == "clustered_walk":
-            if not clusters or len(per) != len(clusters):
-                raise ValueError(f"targets.per_cluster needs one count per cluster: got "
-                                 f"{len(per)} counts for {len(clusters)} clusters")
-            if sum(per) != self.count:
-                raise ValueError(f"targets.count ({self.count}) must equal "
-                                 f"sum(targets.per_cluster) ({sum(per)})")
+        object.__setattr__(self, "clusters", _boxes(self.clusters, "targets.clusters"))
+        object.__setattr__(self, "per_cluster", _counts(self.per_cluster, "targets.per_cluster"))
 
 
 @dataclass(frozen=True)
@@ -271,19 +266,13 @@ class Scenario:
                              f"dt = {self.dt} s")
         expect_int(self.robots, "robots", low=1)
         box = expect_box(self.robot_start_box, "robot_start_box")
-        _box_inside("robot_start_box", box, self.env)
+        check_inside("robot_start_box", box, self.env)
         object.__setattr__(self, "robot_start_box", box)
         expect_number(self.robot_max_speed, "robot_max_speed", low=0.0, strict=True)
         if not isinstance(self.targets, TargetConfig):
             raise ValueError(f"targets must be a TargetConfig, "
                              f"got {type(self.targets).__name__}")
-        if self.targets.kind == "dames_walk":
-            try:
-                substeps_per_step(self.dt, self.targets.heading_rate)
-            except ValueError as exc:
-                raise ValueError(f"targets.heading_rate: {exc}") from None
-        for i, c in enumerate(self.targets.clusters):
-            _box_inside(f"targets.clusters[{i}]", c, self.env)
+        lookup(self.targets.kind).validate(self)
         expect_number(self.extraction_threshold, "extraction_threshold", low=0.0)
         expect_number(self.ospa_c, "ospa_c", low=0.0, strict=True)
         expect_number(self.ospa_p, "ospa_p", low=1.0, allow_inf=True)
@@ -351,13 +340,10 @@ class Scenario:
         """The true targets at step 0 (ids (N,), positions (N, 2) [m]), as the world draws them.
 
         The same draw as :class:`phd_swarm.sim.world.World` built from this scenario (the
-        targets' own stream, child 1 of the seed). A system whose prior comes from an
-        "external source" that knows roughly where the targets are (Sung & Tokekar
-        Sec. V-A and VI-A) builds it from this, in its part's set-up.
+        targets' own stream, child 1 of the seed, :data:`STREAMS`). A system whose prior
+        comes from an "external source" that knows roughly where the targets are (Sung &
+        Tokekar Sec. V-A and VI-A) builds it from this, in its part's set-up.
         """
-        from phd_swarm.sim.targets import make_targets
-        from phd_swarm.sim.world import STREAMS
-
         child = np.random.SeedSequence(self.seed).spawn(len(STREAMS))[STREAMS.index("targets")]
         targets = make_targets(np.random.default_rng(child), self)
         return targets.ids.copy(), targets.positions.copy()
@@ -374,5 +360,5 @@ class Scenario:
         return self.with_overrides(system=self.system.with_parts(**changes))
 
 
-__all__ = ["BOTTOM_CENTRE_BOX", "EXTRACTION_WINDOW_M", "MAP_100", "TARGET_KINDS", "Scenario",
-           "TargetConfig"]
+__all__ = ["BOTTOM_CENTRE_BOX", "EXTRACTION_WINDOW_M", "MAP_100", "STREAMS", "TARGET_KINDS",
+           "Scenario", "TargetConfig"]

@@ -1,8 +1,9 @@
 """Checks of the target models' arguments, and read-only arrays of their state.
 
-Shared by :mod:`phd_swarm.sim.targets` and :mod:`phd_swarm.sim.walkers`: a bad box, count
-or rate is a ``ValueError`` naming the argument, and a model's positions, headings and ids
-are handed out frozen so no caller can move a target behind the model's back.
+Shared by the target kinds' modules (:mod:`phd_swarm.sim.dames_targets`,
+:mod:`phd_swarm.sim.walkers`) and the scenario: a bad box, count or rate is a
+``ValueError`` naming the argument, and a model's positions, headings and ids are handed out
+frozen so no caller can move a target behind the model's back.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+
+from phd_swarm.core.geometry.grid import Environment
 
 
 def frozen(a: np.ndarray) -> np.ndarray:
@@ -41,3 +44,11 @@ def check_nonneg(name: str, value: float, positive: bool = False) -> float:
         raise ValueError(f"{name} must be a finite number {'> 0' if positive else '>= 0'}, "
                          f"got {value!r}")
     return float(value)
+
+
+def check_inside(name: str, box: Sequence[float], env: Environment) -> None:
+    """Raise unless the box (xmin, ymin, xmax, ymax) [m] lies inside the map ``env``."""
+    if not (box[0] >= env.xmin and box[1] >= env.ymin and box[2] <= env.xmax
+            and box[3] <= env.ymax):
+        raise ValueError(f"{name} {box} must lie inside the environment "
+                         f"({env.xmin}, {env.ymin}, {env.xmax}, {env.ymax})")

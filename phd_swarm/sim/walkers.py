@@ -6,8 +6,9 @@
 - :class:`TurningWalkers` (Sung & Tokekar 2022 Sec. VI-A.4): straight lines at a constant
   speed, a new random heading every so often and at the map's edge.
 
-Dames' static targets and walkers, and :func:`~phd_swarm.sim.targets.make_targets`, which
-chooses a model by ``targets.kind``, are in :mod:`phd_swarm.sim.targets`.
+They are registered as the target kinds ``clustered_walk`` and ``turning_walk``
+(:mod:`phd_swarm.sim.target_kinds`); Dames' static targets and walkers are in
+:mod:`phd_swarm.sim.dames_targets`.
 """
 
 from __future__ import annotations
@@ -17,7 +18,18 @@ from collections.abc import Sequence
 import numpy as np
 
 from phd_swarm.core.geometry.grid import Environment
-from phd_swarm.sim.target_checks import check_box, check_count, check_nonneg, frozen
+from phd_swarm.sim.target_checks import (
+    check_box,
+    check_count,
+    check_inside,
+    check_nonneg,
+    frozen,
+)
+from phd_swarm.sim.target_kinds import TargetKind, TargetSetting, register
+
+__all__ = ["ClusteredWalkers", "TurningWalkers", "reflect_into"]
+
+Box = tuple[float, float, float, float]
 
 
 def reflect_into(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -243,3 +255,41 @@ class TurningWalkers:
             nxt[out] = self._positions[out] + step * np.stack([np.cos(chosen),
                                                                np.sin(chosen)], axis=1)
         self._positions = frozen(np.clip(nxt, self._lo, self._hi))
+
+
+def _make_clustered_walk(rng: np.random.Generator, scenario: TargetSetting, *,
+                         clusters: tuple[Box, ...], per_cluster: tuple[int, ...],
+                         step_sd: float, max_speed: float) -> ClusteredWalkers:
+    """The ``clustered_walk`` targets: :meth:`ClusteredWalkers.sample`."""
+    return ClusteredWalkers.sample(rng, clusters, per_cluster, step_sd, max_speed)
+
+
+def _check_clustered_walk(scenario: TargetSetting, *, count: int, clusters: tuple[Box, ...],
+                          per_cluster: tuple[int, ...]) -> None:
+    if not clusters or len(per_cluster) != len(clusters):
+        raise ValueError(f"targets.per_cluster needs one count per cluster: got "
+                         f"{len(per_cluster)} counts for {len(clusters)} clusters")
+    if sum(per_cluster) != count:
+        raise ValueError(f"targets.count ({count}) must equal "
+                         f"sum(targets.per_cluster) ({sum(per_cluster)})")
+    for i, box in enumerate(clusters):
+        check_inside(f"targets.clusters[{i}]", box, scenario.env)
+
+
+def _make_turning_walk(rng: np.random.Generator, scenario: TargetSetting, *, count: int,
+                       draw_box: Box | None, speed: float,
+                       turn_every: float) -> TurningWalkers:
+    """The ``turning_walk`` targets: :meth:`TurningWalkers.sample` (``draw_box`` default E)."""
+    return TurningWalkers.sample(rng, scenario.env, count, draw_box, speed, turn_every)
+
+
+register(TargetKind(
+    name="clustered_walk", make=_make_clustered_walk,
+    description="Chen Sec. 4: a Gaussian random walk capped at max_speed, each target in "
+                "its cluster box",
+    check=_check_clustered_walk))
+
+register(TargetKind(
+    name="turning_walk", make=_make_turning_walk,
+    description="Sung VI-A.4: straight lines, a new random heading every turn_every "
+                "seconds and at the map's edge"))

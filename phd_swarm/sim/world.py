@@ -31,11 +31,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from phd_swarm.core.geometry.centroids import next_position, step_length
-from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.scenario import STREAMS, Scenario
 from phd_swarm.sim.targets import Targets, make_targets
 
-#: Order of the child streams spawned from the scenario seed.
-STREAMS = ("robot_starts", "targets", "sensor")
+__all__ = ["STREAMS", "World", "start_positions"]
 
 
 def start_positions(scenario: Scenario, rng: np.random.Generator) -> np.ndarray:
@@ -71,8 +70,9 @@ class World:
     ----------
     scenario : Scenario
         The settings.
-    targets : StaticTargets or DamesWalkers or ClusteredWalkers
-        The true target population X^k.
+    targets : Targets
+        The true target population X^k, of the scenario's kind
+        (:func:`~phd_swarm.sim.targets.make_targets`).
     step_index : int
         k, the number of :meth:`advance` calls so far.
     """

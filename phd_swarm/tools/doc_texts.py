@@ -12,7 +12,9 @@ from __future__ import annotations
 from phd_swarm.config import node_params
 from phd_swarm.core.params import ParamSpec
 from phd_swarm.nodes import topics
-from phd_swarm.sim.presets import PRESETS
+from phd_swarm.sim import presets
+from phd_swarm.sim.target_kinds import lookup
+from phd_swarm.sim.targets import TARGET_KINDS
 
 #: Displayed name of a robot topic: ``/robot_<id>/<relative>``.
 ROBOT_PATTERN = "/robot_<id>/{}"
@@ -54,7 +56,8 @@ DESCRIPTIONS: dict[str, str] = {
 
 #: Meaning and unit of every flattened scenario key (``scenario.<key>``), in display order.
 SCENARIO_MEANINGS: dict[str, str] = {
-    "preset": f"Preset that the other keys override: {', '.join(PRESETS)}.",
+    "preset": "Preset that the other keys override: "
+              + ", ".join(f"{p.name} ({p.paper})" for p in presets.registered()) + ".",
     "name": "Label of the run (default: the preset's name).",
     "env.xmin": "Map E: smallest x [m].",
     "env.ymin": "Map E: smallest y [m].",
@@ -87,9 +90,8 @@ SCENARIO_MEANINGS: dict[str, str] = {
     "robot_max_speed": "Speed limit of the holonomic robots [m/s].",
     "robot_start_grid": "If set, robots start on random nodes of a grid of this spacing [m] "
                         "inside robot_start_box (Shirsat & Berman); unset: uniform in the box.",
-    "targets.kind": "True population: static (Dames IV-A), dames_walk (Dames IV-B), "
-                    "clustered_walk (Chen Sec. 4), turning_walk (Sung VI-A.4), ncv "
-                    "(Papaioannou et al.: nearly constant velocity, births and deaths).",
+    "targets.kind": "True population: "
+                    + ", ".join(f"{k} ({lookup(k).description})" for k in TARGET_KINDS) + ".",
     "targets.count": "static: targets drawn (those outside E are dropped); dames_walk: "
                      "initial number; clustered_walk: sum of per_cluster; turning_walk: "
                      "number; ncv: targets over the run (born at their birth times).",

@@ -10,12 +10,15 @@ Usage::
 
 The tables come from :mod:`phd_swarm.nodes.topics` (names, types, QoS names, writers,
 rates), :mod:`phd_swarm.nodes.qos` (what each QoS name means for writer and reader),
-:mod:`phd_swarm.config.node_params` (node parameters) and the scenario presets of
-:mod:`phd_swarm.sim.scenario` (through :func:`phd_swarm.config.flatten`, exactly the
-``scenario.*`` parameters the nodes declare). What the code cannot say, one line per topic
-and per scenario key, is kept here in :data:`DESCRIPTIONS` and :data:`SCENARIO_MEANINGS`;
-rendering fails if one is missing, so a new topic or field cannot go undocumented, and the
-test suite runs ``--check`` so the files never go stale.
+:mod:`phd_swarm.config.node_params` (node parameters), the registered scenario presets
+(:mod:`phd_swarm.sim.presets`, through :func:`phd_swarm.config.flatten`, exactly the
+``scenario.*`` parameters the nodes declare) and target kinds
+(:mod:`phd_swarm.sim.target_kinds`: which kind reads which ``targets.*`` field). What the
+code cannot say, one line per topic and per scenario key, is kept in
+:mod:`phd_swarm.tools.doc_texts` (:data:`DESCRIPTIONS`, :data:`SCENARIO_MEANINGS`);
+rendering fails if one is missing, or if a ``targets.*`` line names other kinds than those
+that read the field, so a new topic, field or kind cannot go undocumented, and the test
+suite runs ``--check`` so the files never go stale.
 
 The package's docs show its own parts only. A user who adds a system from outside the
 package (``scenario.system.plugins``) gets the same two files with the plugin's parts in
@@ -42,7 +45,8 @@ from phd_swarm.core import registry
 from phd_swarm.core.params import ParamSpec
 from phd_swarm.nodes import qos, topics
 from phd_swarm.sim.presets import PRESETS
-from phd_swarm.sim.scenario import TARGET_KINDS
+from phd_swarm.sim.target_kinds import lookup
+from phd_swarm.sim.targets import TARGET_KINDS
 from phd_swarm.tools.doc_texts import (  # noqa: F401  (re-exported for tests)
     _GENERATED,
     DESCRIPTIONS,
@@ -214,15 +218,21 @@ def scenario_defaults() -> dict[str, dict[str, Any]]:
 
 
 def _kinds_using(key: str, meaning: str) -> set[str] | None:
-    """Target kinds a ``targets.*`` field applies to (None: every preset).
+    """Target kinds that read a ``targets.*`` field (None: not a kind's field, every preset).
 
-    Read from the clauses of its meaning: ``"dames_walk: ..."``,
-    ``"static: ...; dames_walk: ..."``.
+    The kinds' own declarations (:attr:`~phd_swarm.sim.target_kinds.TargetKind.fields`);
+    the meaning must name the same kinds in its clauses (``"dames_walk: ..."``,
+    ``"static: ...; dames_walk: ..."``), else ValueError.
     """
     if not key.startswith("targets.") or key == "targets.kind":
         return None
-    kinds = set(re.findall(r"(?:^|; )(\w+): ", meaning)) & set(TARGET_KINDS)
-    return kinds or None
+    field = key.removeprefix("targets.")
+    kinds = {name for name in TARGET_KINDS if field in lookup(name).fields}
+    named = set(re.findall(r"(?:^|; )(\w+): ", meaning)) & set(TARGET_KINDS)
+    if named != kinds:
+        raise ValueError(f"SCENARIO_MEANINGS[{key!r}] in phd_swarm/tools/doc_texts.py names "
+                         f"the kinds {sorted(named)}, but {sorted(kinds)} read the field")
+    return kinds
 
 
 def render_parameters(plugins: Sequence[str] = ()) -> str:

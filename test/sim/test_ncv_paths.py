@@ -109,7 +109,7 @@ def test_the_scenario_names_the_model_and_only_a_new_model_enters_the_hash():
                              "distributed") for m in ("cut", "contained", "exit")}
     assert len(set(hashes.values())) == 3
     base = PRESETS["papaioannou"]()
-    with pytest.raises(ValueError, match="spawn: uniform"):
-        dataclasses.replace(base.targets, lifetime_model="contained")     # from the centre
+    with pytest.raises(ValueError, match="spawn: uniform"):                # from the centre
+        base.with_overrides(targets=dataclasses.replace(base.targets, lifetime_model="contained"))
     with pytest.raises(ValueError, match="lifetime_model"):
         dataclasses.replace(base.targets, spawn="uniform", lifetime_model="forever")

@@ -41,3 +41,53 @@ def test_chen_preset():
     # 0.05 per m^2 on 0.01 m^2 bins.
     assert s.extraction.bin_threshold(s.grid) == pytest.approx(5e-4)
     assert chen_clustered(resolution=1.0).grid.shape == (100, 100)
+
+
+# --- the registry ---------------------------------------------------------------------------
+
+def test_every_preset_is_registered_by_its_papers_module():
+    from phd_swarm.sim.presets import PRESETS, registered
+
+    homes = {p.name: p.build.__module__.rsplit(".", 1)[-1] for p in registered()}
+    assert homes == {"dames_static": "dames", "dames_moving": "dames",
+                     "chen_clustered": "chen", "sung_tokekar": "sung",
+                     "shirsat_berman": "shirsat", "papaioannou": "papaioannou"}
+    assert dict(PRESETS) == {p.name: p.build for p in registered()}
+    assert list(PRESETS) == sorted(PRESETS)
+    for p in registered():
+        assert p.paper and "\n" not in p.paper, p.name
+
+
+def test_presets_build_their_papers_scenario_without_arguments():
+    from phd_swarm.sim.presets import PRESETS
+
+    for name, build in PRESETS.items():
+        assert build().name == name
+
+
+def test_presets_is_read_only_and_a_name_is_registered_once():
+    from phd_swarm.sim.presets import PRESETS
+    from phd_swarm.sim.presets.registry import preset
+
+    with pytest.raises(TypeError):
+        PRESETS["mine"] = dames_static  # type: ignore[index]
+    with pytest.raises(ValueError, match="already registered"):
+        preset("Dames (2020)")(dames_static)
+
+
+def test_every_target_kind_is_written_out_over_one_preset():
+    import dataclasses
+
+    from phd_swarm.config import scenario_to_dict
+    from phd_swarm.sim.presets import PRESETS, preset_of_kind
+    from phd_swarm.sim.scenario import TARGET_KINDS
+
+    of_kind = preset_of_kind()
+    assert set(of_kind) == set(TARGET_KINDS) and set(of_kind.values()) <= set(PRESETS)
+    # The preset config files name for a scenario of each kind (phd_swarm.config).
+    base = PRESETS["sung_tokekar"]()
+    for kind in TARGET_KINDS:
+        extra = ({"clusters": ((0.0, 0.0, 50.0, 50.0),), "per_cluster": (10,)}
+                 if kind == "clustered_walk" else {})
+        s = base.with_overrides(targets=dataclasses.replace(base.targets, kind=kind, **extra))
+        assert scenario_to_dict(s)["preset"] == of_kind[kind]

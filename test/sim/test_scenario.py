@@ -26,13 +26,15 @@ def test_with_overrides_revalidates():
 
 
 def test_target_config_checks_kind_specific_fields():
+    # Each field on its own in the config; the kind's own fields together when the
+    # scenario is built (more in test_target_kinds).
     with pytest.raises(ValueError, match="targets.kind"):
         TargetConfig(kind="teleport")
     with pytest.raises(ValueError, match="draw_box"):
-        TargetConfig(kind="static", count=3)
+        dames_static().with_overrides(targets=TargetConfig(kind="static", count=3))
     with pytest.raises(ValueError, match="sum"):
-        TargetConfig(kind="clustered_walk", count=5, clusters=((0, 0, 1, 1),),
-                     per_cluster=(4,))
+        chen_clustered().with_overrides(targets=TargetConfig(
+            kind="clustered_walk", count=5, clusters=((0, 0, 1, 1),), per_cluster=(4,)))
     with pytest.raises(ValueError, match=r"clusters\[0\]"):
         chen_clustered().with_overrides(targets=TargetConfig(
             kind="clustered_walk", count=1, clusters=((90, 90, 120, 120),), per_cluster=(1,)))

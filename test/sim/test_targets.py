@@ -1,285 +1,31 @@
-"""Tests for the true target populations (Dames Sec. IV-A/B, Chen Sec. 4)."""
+"""Tests for a scenario's initial targets by its kind (phd_swarm.sim.targets)."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
 
-from phd_swarm.core.geometry.grid import Environment
-from phd_swarm.core.models import BoundaryBirth
-from phd_swarm.sim.presets import chen_clustered, dames_moving, dames_static
-from phd_swarm.sim.targets import (
-    BIRTH_HEADINGS,
-    DamesWalkers,
-    StaticTargets,
-    boundary_ring_area,
-    make_targets,
-    sample_boundary_ring,
-    substeps_per_step,
+from phd_swarm.sim.dames_targets import DamesWalkers, StaticTargets
+from phd_swarm.sim.ncv_paths import NcvPaths
+from phd_swarm.sim.ncv_targets import NcvTargets
+from phd_swarm.sim.presets import (
+    chen_clustered,
+    dames_moving,
+    dames_static,
+    papaioannou,
+    shirsat_berman,
+    sung_tokekar,
 )
-from phd_swarm.sim.walkers import ClusteredWalkers, reflect_into
-
-E = Environment(0.0, 0.0, 100.0, 100.0)
-DRAW = (-10.0, -10.0, 110.0, 110.0)
-DAMES_BIRTH = BoundaryBirth(density=5.26e-5, margin=5.0)
+from phd_swarm.sim.scenario import Scenario
+from phd_swarm.sim.targets import TARGET_KINDS, make_targets
+from phd_swarm.sim.walkers import ClusteredWalkers, TurningWalkers
 
 
-# --- static ---------------------------------------------------------------------------------
+def _of_kind(base: Scenario, kind: str, **fields) -> Scenario:
+    return base.with_overrides(targets=dataclasses.replace(base.targets, kind=kind, **fields))
 
-def test_static_targets_are_inside_the_map_with_consecutive_ids():
-    t = StaticTargets.sample(np.random.default_rng(0), E, 30, DRAW)
-    assert np.all(E.contains(t.positions))
-    assert np.array_equal(t.ids, np.arange(len(t.ids)))
-    before = t.positions.copy()
-    rng = np.random.default_rng(1)
-    state = rng.bit_generator.state
-    t.step(rng, 0.5)
-    assert np.array_equal(t.positions, before)
-    assert rng.bit_generator.state == state  # static targets consume no randomness
-
-
-def test_static_mean_count_is_the_area_fraction():
-    # Kept count ~ Binomial(30, (100/120)^2): mean 20.83, sd 2.04 (paper: 20.0 over 10
-    # trials). The mean of 2000 seeds has sd 0.046.
-    counts = [len(StaticTargets.sample(np.random.default_rng(s), E, 30, DRAW).ids)
-              for s in range(2000)]
-    assert np.mean(counts) == pytest.approx(30 * (100 / 120) ** 2, abs=0.2)
-
-
-def test_static_positions_cannot_be_written():
-    t = StaticTargets.sample(np.random.default_rng(0), E, 5, DRAW)
-    with pytest.raises(ValueError):
-        t.positions[0, 0] = 1.0
-
-
-# --- Dames walkers --------------------------------------------------------------------------
-
-def test_substeps_per_step():
-    assert substeps_per_step(0.5, 10.0) == 5
-    with pytest.raises(ValueError, match="whole number"):
-        substeps_per_step(0.5, 3.0)
-
-
-def test_walkers_move_exactly_a_tenth_of_a_metre_per_substep():
-    # Start in the middle so that no target leaves in one step, no births.
-    rng = np.random.default_rng(3)
-    p0 = 40.0 + 20.0 * rng.random((50, 2))
-    h0 = 2 * np.pi * rng.random(50)
-    w = DamesWalkers(E, p0, h0, speed=1.0, heading_sd=0.1, heading_rate=10.0)
-    # Reproduce the sub-steps by hand from the same stream.
-    check = np.random.default_rng(4)
-    dtheta = 0.1 * check.standard_normal((50, 5))
-    w.step(np.random.default_rng(4), 0.5)
-    h = h0.copy()
-    p = p0.copy()
-    for s in range(5):
-        h = h + dtheta[:, s]
-        step = 0.1 * np.stack([np.cos(h), np.sin(h)], axis=1)
-        assert np.allclose(np.linalg.norm(step, axis=1), 0.1, rtol=0, atol=1e-15)
-        p = p + step
-    assert np.allclose(w.positions, p, rtol=0, atol=1e-12)
-    assert np.allclose(w.headings, h, rtol=0, atol=1e-12)
-    # Net displacement <= 0.5 m (5 x 0.1 m) and close to it for small heading changes.
-    disp = np.linalg.norm(w.positions - p0, axis=1)
-    assert np.all(disp <= 0.5 + 1e-12) and np.all(disp > 0.45)
-
-
-def test_zero_heading_noise_moves_in_a_straight_line():
-    w = DamesWalkers(E, [[50.0, 50.0]], [np.pi / 2], heading_sd=0.0)
-    for _ in range(10):
-        w.step(np.random.default_rng(0), 0.5)
-    assert np.allclose(w.positions, [[50.0, 55.0]], atol=1e-12)
-
-
-def test_targets_leaving_the_map_are_removed_for_good():
-    # Target 0 heads out through x = 0 within one step; target 1 stays inside.
-    w = DamesWalkers(E, [[0.2, 50.0], [50.0, 50.0]], [np.pi, 0.0], heading_sd=0.0)
-    w.step(np.random.default_rng(0), 0.5)
-    assert w.ids.tolist() == [1]
-    assert np.all(E.contains(w.positions))
-
-
-class _ScriptedNormals:
-    """Stands in for a Generator: returns the given heading changes."""
-
-    def __init__(self, normals):
-        self.normals = np.asarray(normals, dtype=float)
-
-    def standard_normal(self, shape):
-        assert shape == self.normals.shape
-        return self.normals
-
-
-def test_a_target_that_exits_and_re_enters_within_a_step_is_removed():
-    # Sub-step 1 turns it to heading pi (x: 0.05 -> -0.05, outside E), sub-step 2 turns it
-    # back to 0 (x -> 0.05), and it ends at x = 0.35 inside E: it left, so it is removed.
-    w = DamesWalkers(E, [[0.05, 50.0], [50.0, 50.0]], [0.0, 0.0], heading_sd=1.0)
-    w.step(_ScriptedNormals([[np.pi, -np.pi, 0, 0, 0], [0, 0, 0, 0, 0]]), 0.5)
-    assert w.ids.tolist() == [1]
-    assert np.allclose(w.positions, [[50.5, 50.0]])
-
-
-def test_birth_rate_and_positions_match_the_birth_phd():
-    # Eq. 14: 5.26e-5 per m^2 on the 1900 m^2 ring, 0.0999 births per step.
-    w = DamesWalkers(E, np.empty((0, 2)), np.empty(0), birth=DAMES_BIRTH)
-    assert w.expected_births == pytest.approx(5.26e-5 * 1900)
-    rng = np.random.default_rng(7)
-    births = []
-    birth_positions = []
-    seen = set()
-    for _ in range(20000):
-        before = set(w.ids.tolist())
-        w.step(rng, 0.5)
-        new = [i for i in w.ids.tolist() if i not in before]
-        assert not (set(new) & seen)  # never reused
-        seen |= set(new)
-        births.append(len(new))
-        mask = np.isin(w.ids, new)
-        birth_positions.append(w.positions[mask])
-        assert len(np.unique(w.ids)) == len(w.ids)
-    # Poisson mean 0.0999: the mean of 20000 steps has sd 0.00224; allow 4 sd.
-    assert np.mean(births) == pytest.approx(0.0999, abs=0.009)
-    assert np.var(births) == pytest.approx(0.0999, abs=0.015)
-    z = np.concatenate(birth_positions)
-    assert len(z) > 1500
-    assert np.all(E.contains(z))
-    assert np.all(E.distance_to_boundary(z) <= 5.0)
-
-
-def _newborns(heading: str, steps: int = 4000) -> tuple[np.ndarray, np.ndarray]:
-    """Positions and headings of the targets born in ``steps`` steps (no initial ones)."""
-    w = DamesWalkers(E, np.empty((0, 2)), np.empty(0), heading_sd=0.0, birth=DAMES_BIRTH,
-                     birth_heading=heading)
-    rng = np.random.default_rng(3)
-    pos, head = [], []
-    for _ in range(steps):
-        before = w.ids.max(initial=-1)
-        w.step(rng, 0.5)
-        new = w.ids > before
-        pos.append(w.positions[new])
-        head.append(w.headings[new])
-    return np.concatenate(pos), np.concatenate(head)
-
-
-def test_inward_births_head_into_the_map_and_uniform_ones_anywhere():
-    centre = np.array([50.0, 50.0])
-    for heading, facing in (("inward", (1.0, 1.0)), ("uniform", (0.4, 0.6))):
-        p, h = _newborns(heading)
-        assert len(p) > 300
-        to_centre = centre - p
-        cos = (np.cos(h) * to_centre[:, 0] + np.sin(h) * to_centre[:, 1]) / np.hypot(
-            to_centre[:, 0], to_centre[:, 1])
-        assert facing[0] <= np.mean(cos >= 0.0) <= facing[1], heading
-    # The same draws place the first newborns (later the populations, and with them the
-    # number of heading draws, differ).
-    np.testing.assert_array_equal(_newborns("inward", 40)[0][:1],
-                                  _newborns("uniform", 40)[0][:1])
-    # Inward births live longer, so the population settles higher (Dames: "around 35").
-    # ~9 against ~17 targets (4 runs of 1500 s, the last 1000 s; one run varies by +-4).
-    counts = {}
-    for heading in BIRTH_HEADINGS:
-        n = []
-        for seed in range(4):
-            w = DamesWalkers.sample(np.random.default_rng(seed), E, 20, birth=DAMES_BIRTH,
-                                    birth_heading=heading)
-            rng = np.random.default_rng(seed + 10)
-            for k in range(3000):
-                w.step(rng, 0.5)
-                if k >= 1000:
-                    n.append(len(w.ids))
-        counts[heading] = np.mean(n)
-    assert counts["inward"] > 1.4 * counts["uniform"], counts
-
-
-def test_unknown_birth_heading_is_refused():
-    with pytest.raises(ValueError, match="birth_heading must be one of"):
-        DamesWalkers(E, np.empty((0, 2)), np.empty(0), birth_heading="north")
-
-
-def test_ids_increase_and_are_never_reused():
-    w = DamesWalkers.sample(np.random.default_rng(1), E, 20, birth=DAMES_BIRTH)
-    rng = np.random.default_rng(2)
-    all_ids: set[int] = set(w.ids.tolist())
-    alive_sets = []
-    for _ in range(1000):
-        w.step(rng, 0.5)
-        ids = w.ids.tolist()
-        assert len(set(ids)) == len(ids)
-        assert ids == sorted(ids)
-        alive_sets.append(set(ids))
-        all_ids |= set(ids)
-    # An id that disappeared never comes back.
-    for k in range(1, len(alive_sets)):
-        gone = alive_sets[k - 1] - alive_sets[k]
-        assert not any(gone & s for s in alive_sets[k:])
-    assert max(all_ids) == len(all_ids) - 1  # ids handed out consecutively
-
-
-def test_ring_sampling_is_uniform_on_the_ring():
-    u = np.random.default_rng(0).random((200000, 3))
-    z = sample_boundary_ring(u, E, 5.0)
-    assert np.all(E.distance_to_boundary(z) <= 5.0) and np.all(E.contains(z))
-    # Uniform on the ring: each 5 x 5 m corner square holds 25/1900 of the points.
-    corner = (z[:, 0] <= 5) & (z[:, 1] <= 5)
-    assert corner.mean() == pytest.approx(25 / 1900, rel=0.05)
-    bottom_mid = (z[:, 1] <= 5) & (z[:, 0] > 5) & (z[:, 0] < 95)
-    assert bottom_mid.mean() == pytest.approx(450 / 1900, rel=0.02)
-
-
-def test_ring_area_covers_small_maps():
-    assert boundary_ring_area(E, 5.0) == pytest.approx(1900.0)
-    assert boundary_ring_area(Environment(0, 0, 8, 20), 5.0) == pytest.approx(160.0)
-    z = sample_boundary_ring(np.random.default_rng(0).random((1000, 3)),
-                             Environment(0, 0, 8, 20), 5.0)
-    assert np.all(Environment(0, 0, 8, 20).contains(z))
-
-
-def test_walker_step_rejects_fractional_substeps():
-    w = DamesWalkers(E, [[50.0, 50.0]], [0.0])
-    with pytest.raises(ValueError, match="whole number"):
-        w.step(np.random.default_rng(0), 0.25)
-
-
-# --- clustered walkers ----------------------------------------------------------------------
-
-BOXES = ((0.0, 0.0, 33.0, 33.0), (67.0, 67.0, 100.0, 100.0))
-
-
-def test_clustered_counts_boxes_and_speed_cap():
-    w = ClusteredWalkers.sample(np.random.default_rng(0), BOXES, (30, 30), step_sd=1.0,
-                                max_speed=3.0)
-    assert len(w.ids) == 60 and np.bincount(w.cluster).tolist() == [30, 30]
-    lo, hi = w.boxes[:, :2], w.boxes[:, 2:]
-    rng = np.random.default_rng(1)
-    for _ in range(2000):
-        before = w.positions.copy()
-        w.step(rng, 0.5)
-        assert np.all(w.positions >= lo) and np.all(w.positions <= hi)
-        assert np.all(np.linalg.norm(w.positions - before, axis=1) <= 1.5 + 1e-12)
-    assert w.ids.tolist() == list(range(60))
-
-
-def test_clustered_cap_binds_for_large_steps():
-    w = ClusteredWalkers([[50.0, 50.0]], [[0, 0, 100, 100]], step_sd=100.0, max_speed=3.0)
-    w.step(np.random.default_rng(0), 0.5)
-    assert np.linalg.norm(w.positions[0] - [50.0, 50.0]) == pytest.approx(1.5)
-
-
-def test_clustered_step_sd_sets_the_spread():
-    # Far from the edges and with no cap, a step is N(0, (step_sd dt)^2 I).
-    w = ClusteredWalkers(np.full((20000, 2), 50.0), np.tile([0, 0, 100, 100], (20000, 1)),
-                         step_sd=1.0, max_speed=1e9)
-    w.step(np.random.default_rng(5), 0.5)
-    assert np.allclose(w.positions.std(axis=0), 0.5, atol=0.01)
-
-
-def test_reflection_folds_back_into_the_box():
-    lo, hi = np.array([0.0, 0.0]), np.array([10.0, 10.0])
-    x = np.array([[-1.0, 11.5], [5.0, 25.0], [10.0, 0.0]])
-    assert np.allclose(reflect_into(x, lo, hi), [[1.0, 8.5], [5.0, 5.0], [10.0, 0.0]])
-
-
-# --- factory --------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("preset, kind", [(dames_static, StaticTargets),
                                           (dames_moving, DamesWalkers),
@@ -301,45 +47,67 @@ def test_make_targets_without_birth():
     assert t.expected_births == 0.0
 
 
-# ------------------------------------------------------------------ turning walkers
-def _turning(n=50, speed=0.05, turn_every=400.0, seed=0):
-    from phd_swarm.core.geometry.grid import Environment
-    from phd_swarm.sim.walkers import TurningWalkers
-    env = Environment(0.0, 0.0, 150.0, 150.0)
-    return env, TurningWalkers.sample(np.random.default_rng(seed), env, n, None, speed,
-                                      turn_every)
+def _direct(kind: str, rng: np.random.Generator, s: Scenario):
+    """The population each kind stood for before the kinds were registered, drawn by hand."""
+    c, env = s.targets, s.env
+    if kind == "static":
+        return StaticTargets.sample(rng, env, c.count, c.draw_box)
+    if kind == "dames_walk":
+        return DamesWalkers.sample(rng, env, c.count, c.speed, c.heading_sd, c.heading_rate,
+                                   s.models.birth if c.birth else None, c.birth_heading)
+    if kind == "clustered_walk":
+        return ClusteredWalkers.sample(rng, c.clusters, c.per_cluster, c.step_sd, c.max_speed)
+    if kind == "turning_walk":
+        return TurningWalkers.sample(rng, env, c.count, c.draw_box, c.speed, c.turn_every)
+    if c.lifetime_model != "cut":
+        return NcvPaths.sample(rng, env, c.count, s.dt, s.steps, model=c.lifetime_model,
+                               draw_box=c.draw_box, speed=c.speed,
+                               lifetime_mean=c.lifetime_mean, birth_spread=c.birth_spread,
+                               q=c.process_noise, noise_form=c.noise_form)
+    return NcvTargets.sample(rng, env, c.count, s.dt, spawn=c.spawn, draw_box=c.draw_box,
+                             speed=c.speed, lifetime_mean=c.lifetime_mean,
+                             birth_spread=c.birth_spread, q=c.process_noise,
+                             noise_form=c.noise_form)
 
 
-def test_turning_walkers_go_straight_at_their_speed_between_turns():
-    _, t = _turning()
-    rng = np.random.default_rng(1)
-    for _ in range(399):
-        before, heading = t.positions.copy(), t.headings
-        t.step(rng, 1.0)
-        inside = np.all((before > 1.0) & (before < 149.0), axis=1)
-        step = t.positions - before
-        assert np.allclose(np.hypot(step[:, 0], step[:, 1]), 0.05)
-        # Away from the boundary the heading does not change before the 400th second.
-        assert np.array_equal(t.headings[inside], heading[inside])
+def _scenarios():
+    yield "static", dames_static()
+    yield "dames_walk", dames_moving()
+    yield "dames_walk", _of_kind(dames_moving(), "dames_walk", birth_heading="uniform")
+    yield "clustered_walk", chen_clustered()
+    yield "turning_walk", _of_kind(sung_tokekar(), "turning_walk")
+    yield "ncv", papaioannou()
+    for model in ("contained", "exit"):
+        yield "ncv", _of_kind(papaioannou(targets=20, spawn="uniform"), "ncv",
+                              lifetime_model=model, lifetime_mean=30.0, birth_spread=20.0)
 
 
-def test_turning_walkers_turn_every_turn_every_seconds():
-    _, t = _turning(speed=0.0)            # not moving: only the scheduled turns happen
-    rng = np.random.default_rng(2)
-    h0 = t.headings
-    for _ in range(399):
-        t.step(rng, 1.0)
-    assert np.array_equal(t.headings, h0)
-    t.step(rng, 1.0)
-    assert not np.any(t.headings == h0)
+@pytest.mark.parametrize("kind, scenario", list(_scenarios()),
+                         ids=[f"{k}-{i}" for i, (k, _) in enumerate(_scenarios())])
+def test_the_looked_up_kind_draws_what_the_model_draws_to_the_bit(kind, scenario):
+    # Same targets, same draws in the same order: the steps consume the same stream.
+    a = make_targets(np.random.default_rng(3), scenario)
+    b = _direct(kind, np.random.default_rng(3), scenario)
+    assert type(a) is type(b)
+    ra, rb = np.random.default_rng(4), np.random.default_rng(4)
+    for _ in range(20):
+        assert np.array_equal(a.ids, b.ids) and np.array_equal(a.positions, b.positions)
+        a.step(ra, scenario.dt)
+        b.step(rb, scenario.dt)
+    assert ra.bit_generator.state == rb.bit_generator.state
 
 
-def test_turning_walkers_stay_inside_and_are_reproducible():
-    env, a = _turning(n=30, speed=3.0)
-    _, b = _turning(n=30, speed=3.0)
-    ra, rb = np.random.default_rng(5), np.random.default_rng(5)
-    for _ in range(500):
-        a.step(ra, 1.0)
-        b.step(rb, 1.0)
-        assert np.all(env.contains(a.positions))
+def test_every_kind_draws_its_targets():
+    drawn = {kind for kind, s in _scenarios()
+             if len(make_targets(np.random.default_rng(0), s).ids) > 0}
+    assert drawn == set(TARGET_KINDS)
+
+
+def test_a_layout_seed_fixes_static_targets_whatever_the_run():
+    s = shirsat_berman()
+    a = make_targets(np.random.default_rng(0), s)
+    b = make_targets(np.random.default_rng(99), s)
     assert np.array_equal(a.positions, b.positions)
+    free = _of_kind(s, "static", layout_seed=None)
+    assert not np.array_equal(make_targets(np.random.default_rng(0), free).positions,
+                              make_targets(np.random.default_rng(99), free).positions)
