@@ -46,7 +46,7 @@ Scenario A (search, limited field of view), 500 steps (``--quick``: 60):
   reduction T = 1e-5, U = 4, J_max = 100;
 - p_D of a component: at its mean (0.9 if the mean is inside the disk, else 0) for Stone
   Soup (a custom updater) and for our "mean" row; our "integrated" row uses
-  ``phd_swarm.core.estimators.detection.DiskFov(25, 0.9, integrate=True)``
+  ``phd_swarm.core.sensors.fov_detection.DiskFov(25, 0.9, integrate=True)``
   (:func:`our_a_pd`). OSPA c = 100 m, p = 2, and the oracle OSPA: the estimate is
   every target that has been inside the FoV at some step so far, exactly.
 
@@ -85,12 +85,12 @@ Range-bearing on B (``--only rb`` or the default run): the truth of B measured b
 Papaioannou's range-bearing sensor (Sec. VI-A noise: sd 1 m + 5e-5 r in range, 1 degree +
 1e-5 r rad in bearing) from the centre of the square, p_D 0.95, clutter Poisson(10) uniform
 over the square, measured without noise in (r, phi) (its intensity there is
-``lambda r / A``, :func:`.range_bearing.clutter_density_square`). Ours: the GM-PHD with the
-EKF and the UKF update, and the SMC-PHD with the range-bearing likelihood; models, births
-and reduction as on B. Stone Soup's counterpart of the SMC-PHD (two rows, its updater's
-noisy likelihood and the exact one, as on "smc"; same budget, births and extraction):
-``CartesianToBearingRange`` (bearing, range order; our rows are converted, the bearing
-difference wrapped) cannot take a range-dependent noise, so
+``lambda r / A``, :func:`.range_bearing_model.clutter_density_square`). Ours: the GM-PHD with
+the EKF and the UKF update (:mod:`gm_phd_nonlinear`), and the SMC-PHD with the
+range-bearing likelihood; models, births and reduction as on B. Stone Soup's counterpart of
+the SMC-PHD (two rows, its updater's noisy likelihood and the exact one, as on "smc"; same
+budget, births and extraction): ``CartesianToBearingRange`` (bearing, range order; our rows
+are converted, the bearing difference wrapped) cannot take a range-dependent noise, so
 ``estimators_stonesoup.RangeDependentBearingRange`` evaluates the likelihood with the sds
 at each particle's range, and ``_PolarClutterSMCPHDUpdater`` gives each detection its
 clutter intensity ``lambda r / A`` (Stone Soup's updater takes one scalar). The GM-PHD
@@ -363,10 +363,10 @@ def our_a_pd(kind: str, spec: SearchSpec | None = None) -> DetectionProbability:
 
     ``kind`` "mean": p_D at the component mean (what Stone Soup does). ``kind``
     "integrated": ``DiskFov(radius, p_inside, integrate=True)`` of
-    :mod:`phd_swarm.core.estimators.detection`, p_inside times the component's mass in the
+    :mod:`phd_swarm.core.sensors.fov_detection`, p_inside times the component's mass in the
     FoV (Sung & Tokekar eq. 9-10).
     """
-    from phd_swarm.core.estimators.detection import DiskFov
+    from phd_swarm.core.sensors.fov_detection import DiskFov
 
     spec = spec or SearchSpec()
     if kind not in ("mean", "integrated"):
@@ -458,7 +458,7 @@ def revisit_model(spec: RevisitSpec, merge_metric: str | None = None
 
 def run_revisit(data: ScenarioData, spec: RevisitSpec) -> list[tuple[str, Run]]:
     """Scenario C's rows: p_D at the mean and integrated, under each merge rule."""
-    from phd_swarm.core.estimators.detection import DiskFov
+    from phd_swarm.core.sensors.fov_detection import DiskFov
 
     runs = []
     for rule in MERGE_METRICS:
@@ -517,7 +517,7 @@ def run_ours_smc(data: ScenarioData, spec: TrackingSpec, particles: int,
 def make_range_bearing(data: ScenarioData, spec: TrackingSpec,
                        rng: np.random.Generator) -> ScenarioData:
     """B's truth measured in range and bearing from the square's centre (see the docstring)."""
-    from phd_swarm.core.estimators.range_bearing import RangeBearingSensor
+    from phd_swarm.core.sensors.range_bearing_model import RangeBearingSensor
 
     sensor_model = RangeBearingSensor()
     centre = np.full(2, spec.side / 2)
@@ -535,8 +535,9 @@ def make_range_bearing(data: ScenarioData, spec: TrackingSpec,
 def run_ours_range_bearing(data: ScenarioData, spec: TrackingSpec, method: str,
                            particles: int, seed: int) -> Run:
     """Our GM-PHD (``method`` "ekf" or "ukf") or SMC-PHD ("smc") on range-bearing B."""
-    from phd_swarm.core.estimators.range_bearing import (
-        RangeBearingMeasurement,
+    from gm_phd_nonlinear import RangeBearingMeasurement
+
+    from phd_swarm.core.sensors.range_bearing_model import (
         RangeBearingSensor,
         clutter_density_square,
         range_bearing_log_likelihood,
@@ -743,7 +744,7 @@ def main(argv: list[str] | None = None) -> int:
                                                          args.seed),
                                   rb_data, b_spec.ospa_c, b_spec.ospa_p, size_kind))
         if ss is not None:
-            from phd_swarm.core.estimators.range_bearing import RangeBearingSensor
+            from phd_swarm.core.sensors.range_bearing_model import RangeBearingSensor
 
             sensor_model = RangeBearingSensor()
             noise_sd = (sensor_model.zeta0, sensor_model.beta_zeta, sensor_model.phi0,

@@ -330,7 +330,7 @@ def run_smc_tracking(data, spec, particles: int, seed: int,
 class RangeDependentBearingRange(CartesianToBearingRange):
     """``CartesianToBearingRange`` whose noise sds grow with each particle's range.
 
-    Our scenario's sensor (Papaioannou Sec. VI-A, ``phd_swarm.core.estimators.range_bearing``)
+    Our scenario's sensor (Papaioannou Sec. VI-A, ``phd_swarm.core.sensors.range_bearing_model``)
     has g(z | x) = N(z; h(x), diag(sigma_phi(r)^2, sigma_r(r)^2)) with
     ``sigma_r = zeta0 + beta_zeta r``, ``sigma_phi = phi0 + beta_phi r`` at the target's
     range r = ||p - s||. Stone Soup 1.9.1's ``CartesianToBearingRange`` has a single noise

@@ -99,7 +99,7 @@ class World:
         #: Robot id -> the labels of its last scan, (M,) int64, 0 for clutter; filled only
         #: by a sensor that identifies targets (:mod:`phd_swarm.core.sensors.disk_labelled`).
         self.scan_labels: dict[int, np.ndarray] = {}
-        #: What the sensor part's set-up made of the scenario (``disk``: its models).
+        #: What the sensor part's set-up made of the scenario (``disk``: a ``DiskSensor``).
         self._sensor_model = sensor.setup(scenario, scenario.system)
 
     @property

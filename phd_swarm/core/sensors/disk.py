@@ -1,7 +1,8 @@
 """The disk sensor (Dames 2020 Sec. II-B): a field-of-view disk, position measurements.
 
-Registered as the ``disk`` sensor (:mod:`phd_swarm.core.registry`); the world simulates scans
-with it and the grid PHD filters them with the same models (``scenario.models``).
+Registered as the ``disk`` sensor (:mod:`phd_swarm.core.registry`); its instance is a
+:class:`DiskSensor` over the scenario's models (``scenario.models``), with which the world
+simulates scans, and the grid PHD filters them with the same models.
 
 Simulation: ground truth to a noisy measurement set with misses and clutter.
 
@@ -13,10 +14,36 @@ disk. All randomness comes from the Generator passed in.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import registry
 from ..models import PhdModels
+from . import base
+
+
+@dataclass(frozen=True)
+class DiskSensor(base.Sensor):
+    """The disk sensor's models: p_d in the disk (eq. 9), N(x, variance I) (eq. 10), clutter.
+
+    Attributes
+    ----------
+    models : PhdModels
+        ``detection`` (p_d, radius [m]), ``measurement`` (variance [m^2]) and ``clutter``
+        (density [1/m^2], eq. 11); the scenario's, which the grid PHD filters with.
+    """
+
+    models: PhdModels
+
+    def detection_probability(self, points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """p_d inside the disk of the sensor at ``pose``, 0 outside (eq. 9); (N,)."""
+        return self.models.detection.probability(points, pose)
+
+    def simulate(self, rng: np.random.Generator, pose: np.ndarray,
+                 targets: np.ndarray) -> np.ndarray:
+        """:func:`simulate_scan` with these models."""
+        return simulate_scan(rng, self.models, pose, targets)
 
 
 def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarray,
@@ -76,12 +103,12 @@ def draw_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarray,
     return hits, clutter, detected
 
 
-def _setup(scenario, system, **runtime) -> PhdModels:
-    return scenario.models
+def _setup(scenario, system, **runtime) -> DiskSensor:
+    return DiskSensor(scenario.models)
 
 
 registry.register(
-    "sensor", "disk", lambda models, rid: models, setup=_setup,
+    "sensor", "disk", lambda sensor, rid: sensor, setup=_setup,
     description="Disk field of view, p_d inside, position measurements with Gaussian noise, "
                 "Poisson clutter uniform in the disk (Dames 2020 eq. 9-11).",
-    provides=("disk_fov", "position_measurement"), simulate=simulate_scan)
+    provides=("disk_fov", "position_measurement"), simulate=base.simulate)

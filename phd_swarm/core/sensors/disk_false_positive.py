@@ -23,6 +23,7 @@ import numpy as np
 from .. import registry
 from ..models import PhdModels
 from ..params import ParamSpec
+from . import base
 
 FALSE_POSITIVE_PROB = ParamSpec(
     "false_positive_prob", 0.1, "disk_false_positive: probability of one false measurement "
@@ -31,7 +32,7 @@ FALSE_POSITIVE_PROB = ParamSpec(
 
 
 @dataclass(frozen=True)
-class DiskFalsePositiveSensor:
+class DiskFalsePositiveSensor(base.Sensor):
     """The sensor's models: the scenario's disk and noise, and the false-positive rate.
 
     Attributes
@@ -54,6 +55,15 @@ class DiskFalsePositiveSensor:
         """Clutter intensity kappa = false_positive_prob / (pi r^2) [1/m^2] in the disk."""
         return self.false_positive_prob / (np.pi * self.radius ** 2)
 
+    def detection_probability(self, points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """p(D|F) inside the disk of the sensor at ``pose``, 0 outside (eq. 9); (N,)."""
+        return self.models.detection.probability(points, pose)
+
+    def simulate(self, rng: np.random.Generator, pose: np.ndarray,
+                 targets: np.ndarray) -> np.ndarray:
+        """:func:`simulate_scan` of this sensor."""
+        return simulate_scan(rng, self, pose, targets)
+
 
 def simulate_scan(rng: np.random.Generator, sensor_model: DiskFalsePositiveSensor,
                   sensor: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -70,10 +80,9 @@ def simulate_scan(rng: np.random.Generator, sensor_model: DiskFalsePositiveSenso
     """
     sensor = np.asarray(sensor, dtype=float)[:2]
     targets = np.asarray(targets, dtype=float).reshape(-1, 2)
-    models = sensor_model.models
-    pd = models.detection.probability(targets, sensor)
-    detected = rng.random(targets.shape[0]) < pd
-    noise = rng.standard_normal((int(detected.sum()), 2)) * np.sqrt(models.measurement.variance)
+    detected = rng.random(targets.shape[0]) < sensor_model.detection_probability(targets, sensor)
+    variance = sensor_model.models.measurement.variance
+    noise = rng.standard_normal((int(detected.sum()), 2)) * np.sqrt(variance)
     hits = targets[detected] + noise
     if rng.random() >= sensor_model.false_positive_prob:
         return hits
@@ -94,4 +103,4 @@ registry.register(
                 "noise, one false positive per scan with a probability, uniform in the disk "
                 "(Sung & Tokekar 2022 Sec. VI-A).",
     options=(FALSE_POSITIVE_PROB,),
-    provides=("disk_fov", "position_measurement"), simulate=simulate_scan)
+    provides=("disk_fov", "position_measurement"), simulate=base.simulate)

@@ -24,11 +24,14 @@ gives neither a position nor a tag). The estimators' models are those of ``disk`
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import registry
 from ..models import PhdModels
-from .disk import draw_scan
+from . import base
+from .disk import DiskSensor, draw_scan
 
 #: The label of a measurement that identifies no target (clutter).
 NO_LABEL = 0
@@ -86,14 +89,30 @@ def simulate_scan(rng: np.random.Generator, models: PhdModels, sensor: np.ndarra
                                   np.arange(targets.shape[0]))[0]
 
 
-def _setup(scenario, system, **runtime) -> PhdModels:
-    return scenario.models
+@dataclass(frozen=True)
+class LabelledDiskSensor(DiskSensor, base.LabellingSensor):
+    """The disk sensor's models (:class:`~.disk.DiskSensor`) and its tag reader."""
+
+    def simulate(self, rng: np.random.Generator, pose: np.ndarray,
+                 targets: np.ndarray) -> np.ndarray:
+        """:func:`simulate_scan` with these models (the ``disk`` sensor's positions)."""
+        return simulate_scan(rng, self.models, pose, targets)
+
+    def simulate_labelled(self, rng: np.random.Generator, pose: np.ndarray,
+                          targets: np.ndarray, ids: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`simulate_labelled_scan` with these models."""
+        return simulate_labelled_scan(rng, self.models, pose, targets, ids)
+
+
+def _setup(scenario, system, **runtime) -> LabelledDiskSensor:
+    return LabelledDiskSensor(scenario.models)
 
 
 registry.register(
-    "sensor", "disk_labelled", lambda models, rid: models, setup=_setup,
+    "sensor", "disk_labelled", lambda sensor, rid: sensor, setup=_setup,
     description="The disk sensor (disk field of view, p_d, Gaussian position noise, Poisson "
                 "clutter) that also reads the identity tag of each target it detects, as a "
                 "tag reader would; clutter carries no tag (Shirsat & Berman Sec. II, eq. 19).",
-    provides=("disk_fov", "position_measurement", "target_label"), simulate=simulate_scan,
-    simulate_labelled=simulate_labelled_scan)
+    provides=("disk_fov", "position_measurement", "target_label"), simulate=base.simulate,
+    simulate_labelled=base.simulate_labelled)

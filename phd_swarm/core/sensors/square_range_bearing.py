@@ -4,13 +4,13 @@ Registered as the ``square_range_bearing`` sensor (:mod:`phd_swarm.core.registry
 at s senses the closed axis-aligned square S_a(s) of side a centred on it (eq. 5: 10 m); a
 target inside is detected with probability p_D^max (0.99) and measured as
 ``z = h(x, s) + v``, range [m] and bearing [rad] with range-dependent noise sds
-(:class:`~phd_swarm.core.estimators.range_bearing.RangeBearingSensor`: zeta0 = 1 m,
+(:class:`~.range_bearing_model.RangeBearingSensor`: zeta0 = 1 m,
 beta_zeta = 5e-5, phi0 = pi/180 rad, beta_phi = 1e-5 rad/m). Clutter: a Poisson number of
 points (mean ``clutter_rate``, 10) "uniformly distributed over the measurement space":
 uniform in range over [0, ``clutter_max_range``] (not stated; the 100 m area's diagonal)
 and in bearing, kappa = rate / (2 pi r_max), so few fall in the square
 (``clutter_space: square`` puts them all uniformly in the square in the plane instead,
-kappa of :func:`~phd_swarm.core.estimators.range_bearing.clutter_density_square`;
+kappa of :func:`~.range_bearing_model.clutter_density_square`;
 docs/decisions.md).
 
 Measurements are (range, bearing) pairs, shape (M, 2), not positions: only estimators that
@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import registry
-from ..estimators.range_bearing import RangeBearingSensor, clutter_density_square
 from ..params import ParamSpec
+from . import base
+from .range_bearing_model import RangeBearingSensor, clutter_density_square
 
 OPTIONS = (
     ParamSpec("sensing_side", 10.0, "square_range_bearing: side a of the square sensing area "
@@ -53,7 +54,7 @@ OPTIONS = (
 
 
 @dataclass(frozen=True)
-class SquareRangeBearing:
+class SquareRangeBearing(base.Sensor):
     """The sensor's models (see the module docstring).
 
     Attributes
@@ -91,6 +92,15 @@ class SquareRangeBearing:
                    - np.asarray(sensor, dtype=float).reshape(2))
         return (d <= 0.5 * self.side).all(axis=1)
 
+    def detection_probability(self, points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """p_D^max inside the closed square S_a(pose), 0 outside (eq. 5); (N,)."""
+        return np.where(self.inside(points, pose), self.p_d, 0.0)
+
+    def simulate(self, rng: np.random.Generator, pose: np.ndarray,
+                 targets: np.ndarray) -> np.ndarray:
+        """:func:`simulate_scan` of this sensor."""
+        return simulate_scan(rng, self, pose, targets)
+
     @property
     def polar_clutter_density(self) -> float | None:
         """The constant kappa [1/(m rad)] of clutter uniform in (r, phi), or None."""
@@ -118,8 +128,7 @@ def simulate_scan(rng: np.random.Generator, sensor_model: SquareRangeBearing,
     """
     s = np.asarray(sensor, dtype=float).reshape(-1)[:2]
     x = np.asarray(targets, dtype=float).reshape(-1, 2)
-    p_d = np.where(sensor_model.inside(x, s), sensor_model.p_d, 0.0)
-    detected = rng.random(len(x)) < p_d
+    detected = rng.random(len(x)) < sensor_model.detection_probability(x, s)
     hits = sensor_model.model.simulate(rng, x[detected], s)
     n = rng.poisson(sensor_model.clutter_rate)
     u = rng.random((n, 2))
@@ -146,4 +155,4 @@ registry.register(
                 "noise, Poisson clutter uniform over the square (Papaioannou et al. Sec. IV-C, "
                 "VI-A).",
     options=OPTIONS, provides=("square_fov", "range_bearing_measurement"),
-    simulate=simulate_scan)
+    simulate=base.simulate)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import registry
-from phd_swarm.core.estimators.range_bearing import RangeBearingSensor
+from phd_swarm.core.sensors.range_bearing_model import RangeBearingSensor
 from phd_swarm.core.sensors.square_range_bearing import SquareRangeBearing, simulate_scan
 
 

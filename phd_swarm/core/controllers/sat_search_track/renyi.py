@@ -29,11 +29,11 @@ Readings of the paper (see also docs/decisions.md):
   (``only_visible=True``); ``only_visible=False`` is the literal union over all estimates.
 - **Sensing square.** Eq. 5 prints the square's boundary (``max{|x - s_x|, |y - s_y|} =
   a/2``); the region ``<= a/2`` is meant ("a square region with total area a^2"), closed as
-  in :class:`.detection.SquareFov`.
+  in :class:`.fov_detection.SquareFov`.
 - **Clutter.** kappa(z) is per m per rad in (r, phi); the default is the plane-uniform
-  clutter over the square, ``lambda_c r / a^2`` (:func:`.range_bearing.clutter_density_square`),
-  the repository's reading of "uniform over the measurement space"; a constant kappa is the
-  literal one.
+  clutter over the square, ``lambda_c r / a^2``
+  (:func:`.range_bearing_model.clutter_density_square`), the repository's reading of
+  "uniform over the measurement space"; a constant kappa is the literal one.
 
 References
 ----------
@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...checks import check_finite, check_probability
-from ...estimators.range_bearing import RangeBearingSensor, clutter_density_square, wrap_angle
+from ...sensors.range_bearing_model import RangeBearingSensor, clutter_density_square, wrap_angle
 
 __all__ = [
     "PredictedMeasurements",
@@ -212,7 +212,7 @@ def predicted_measurements(estimates: np.ndarray, action_positions: np.ndarray,
 def square_clutter(z: np.ndarray, side: float, rate: float) -> np.ndarray:
     """Plane-uniform clutter over the sensing square in (r, phi), for padded sets (U, M, 2).
 
-    :func:`.range_bearing.clutter_density_square` on every slot: ``kappa = rate r / a^2``
+    :func:`.range_bearing_model.clutter_density_square` on every slot: ``kappa = rate r / a^2``
     inside the square centred on the sensor, 0 outside [1/(m rad)]. Shape (U, M).
     """
     z = np.asarray(z, dtype=float)

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...estimators.range_bearing import RangeBearingSensor
+from ...sensors.range_bearing_model import RangeBearingSensor
 from .renyi import (
     _alpha,
     _side,

@@ -11,7 +11,7 @@ A measurement model gives the Kalman terms of every component for a scan taken a
 position (:class:`.gm_phd.filter.KalmanTerms`), the clutter intensity at each measurement, and the
 positions the measurements imply (for the birth rules). :class:`LinearMeasurement` is the
 linear-Gaussian one of the model (z = H x + v); the range-bearing sensor's EKF and UKF forms
-are in :mod:`.range_bearing`.
+serve the estimators benchmark only and live with it (``bench/gm_phd_nonlinear.py``).
 """
 
 from __future__ import annotations
@@ -120,8 +120,8 @@ class GmPhdEstimator(Estimator):
         Initial intensity; empty by default.
     p_d : callable, optional
         ``p_d(means (J, d), covs (J, d, d), sensor (2,) [m]) -> (J,)``, the detection
-        probability of each component for a scan taken at ``sensor`` (:mod:`.detection`
-        has the field-of-view models); 0.9 everywhere by default.
+        probability of each component for a scan taken at ``sensor`` (the sensors'
+        :mod:`.fov_detection` has the field-of-view models); 0.9 everywhere by default.
     measurement : MeasurementModel, optional
         The sensor's measurement model; the model's linear one (H, R, kappa) by default.
     birth : AdaptiveBirth or PerMeasurementBirth, optional

@@ -11,12 +11,13 @@ the PHD recursion keeps that form (Vo & Ma 2006, Propositions 1-2). This module 
   :mod:`.gm_phd.reduce`; :func:`prune_and_merge_carrying` also sums what the components
   carry), :func:`extract` (Table III);
 - :func:`linear_terms` and :func:`update_with_terms`: the update split in two, so that a
-  nonlinear measurement model (:mod:`.range_bearing`) only supplies the Kalman terms.
+  nonlinear measurement model (the benchmark's EKF / UKF forms of the range-bearing sensor,
+  ``bench/gm_phd_nonlinear.py``) only supplies the Kalman terms.
 
 The estimator role over these functions is :class:`.gm_phd.estimator.GmPhdEstimator`.
 
 The detection probability is given per component (the caller evaluates it at the mean, or
-integrates it over the component: :mod:`.detection`), which is exact when p_D is constant
+integrates it over the component: :mod:`.fov_detection`), which is exact when p_D is constant
 over each component's support and an approximation otherwise; the paper's
 Gaussian-mixture p_D extension is not implemented. New components come from the birth
 intensity (A.3), from spawning (A.3, Table I step 1) and, in the estimator, from

@@ -4,22 +4,26 @@ Registered as the ``papaioannou_sat`` estimator (:mod:`phd_swarm.core.registry`)
 propagates the searching-and-tracking (SAT) density of Sec. V-A, which has two parts:
 
 - the target density on true targets, eq. 6 and 8: the particle (SMC) PHD filter of Vo,
-  Singh & Doucet (2005, :mod:`.smc_phd.filter`) with the state ``[x, y, vx, vy]`` (positions first,
+  Singh & Doucet (2005), an :class:`~.smc_phd.estimator.SmcPhdEstimator` this estimator holds
+  (:attr:`PapaioannouEstimator.filter`), with the state ``[x, y, vx, vy]`` (positions first,
   the repository's convention; the paper orders it ``[x, vx, y, vy]``), the NCV motion of
-  Sec. VI-A (F, Q with T = dt), survival p_S = 0.99, the range-bearing likelihood with
-  range-dependent noise, p_D = p_D^max inside the agent's square and 0 outside (eq. 5), and
-  the plane-uniform clutter of the ``square_range_bearing`` sensor; births "distributed
+  Sec. VI-A (F, Q with T = dt), survival p_S = 0.99, and the ``square_range_bearing``
+  sensor's models: the range-bearing likelihood with range-dependent noise, p_D = p_D^max
+  inside the agent's square and 0 outside (eq. 5), its clutter; births "distributed
   inside the agent sensing area with average rate of 3 births per time-step": each update
   first adds the birth intensity ``birth_mass`` spread uniformly over the square S_a(s_k)
   of the step's position, velocities uniform in ``[-birth_speed, birth_speed]^2``
   (``birth_newborn``: they take no missed-detection term, Ristic et al. 2012, so births
-  nobody measured vanish at once). Its particles are drawn where the step's measurements
-  are and weighted by importance (``births: measurement``, :meth:`PapaioannouEstimator.
-  _births_near`): the bearing is measured to 1 degree, 7 cm across at 4 m, so births drawn
-  uniformly over 100 m^2 (``births: uniform``) put almost none in the likelihood's peak;
-  estimates by measurement (Ristic, Clark & Vo 2010: a measurement whose particles took
-  weight > 0.5 gives the weighted mean of their states; ``estimates_from: persistent``
-  counts only the particles that existed before the scan);
+  nobody measured vanish at once; the filter's :class:`~.smc_phd.estimator.ScanBirth`). Its
+  particles are drawn where the step's measurements are and weighted by importance
+  (``births: measurement``, :meth:`PapaioannouEstimator._births_near`): the bearing is
+  measured to 1 degree, 7 cm across at 4 m, so births drawn uniformly over 100 m^2
+  (``births: uniform``) put almost none in the likelihood's peak; then the update, the
+  estimates and the resampling. The estimates are this estimator's own, read off each
+  update between the filter's weighing and its resampling: by measurement (Ristic, Clark & Vo
+  2010: a measurement whose particles took weight > 0.5 gives the weighted mean of their
+  states; ``estimates_from: persistent`` counts only the particles that existed before the
+  scan), held out of view (``hold_gate``), or the k-means of the square's mass;
 - the search density on virtual targets, eq. 7, 9, 10
   (:mod:`phd_swarm.core.estimators.papaioannou.search_map`): one search value per node of the
   search map, decayed by J outside the previous square and set to 1 inside the current one; the
@@ -44,20 +48,13 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from ... import registry
-from ...checks import check_measurements
 from ...outputs import Output
 from ...params import ParamSpec
 from ...scan import Scan
+from ...sensors.range_bearing_model import RangeBearingSensor, range_bearing_log_likelihood
 from ..base import Estimator
-from ..range_bearing import RangeBearingSensor
-from ..smc_phd.filter import (
-    ParticleSet,
-    extract,
-    extract_by_measurement,
-    predict,
-    resample,
-    update,
-)
+from ..smc_phd.estimator import Resampling, ScanBirth, SmcPhdEstimator
+from ..smc_phd.filter import ParticleSet, extract, extract_by_measurement
 from ..smc_phd.models import linear_gaussian_transition
 from . import search_map as sm
 from .figures import step_figures
@@ -178,7 +175,15 @@ class PapaioannouEstimator(Estimator):
     setup : PapaioannouSetup
     robot_id : int
     rng : np.random.Generator
-        Source of the particles' randomness (motion, births, resampling).
+        Source of the particles' randomness (motion, births, resampling), shared with the
+        particle filter.
+
+    Attributes
+    ----------
+    filter : SmcPhdEstimator
+        The particle PHD of the true targets (eq. 6, 8), with the paper's models and births.
+    search : np.ndarray, shape (V,)
+        Search values p_v of the map's nodes (eq. 10), 0 = never searched.
     """
 
     def __init__(self, setup: PapaioannouSetup, robot_id: int,
@@ -186,9 +191,19 @@ class PapaioannouEstimator(Estimator):
         self.setup = setup
         self.robot_id = int(robot_id)
         self.rng = rng
-        self.particles = ParticleSet.empty(4)
-        self._transition = linear_gaussian_transition(setup.f, setup.q)
-        self._sensor: RangeBearingSensor = setup.sensor.model
+        sensor = setup.sensor
+        self._sensor: RangeBearingSensor = sensor.model
+        self.filter = SmcPhdEstimator(
+            dim=4, transition=linear_gaussian_transition(setup.f, setup.q), p_s=setup.p_s,
+            log_likelihood=range_bearing_log_likelihood(sensor.model),
+            p_d=lambda states, pose: sensor.detection_probability(states[:, :2], pose),
+            clutter=sensor.clutter_intensity,
+            birth=ScanBirth(self._births_near if setup.measurement_births else self._births),
+            rng=rng, resampling=Resampling(per_target=setup.per_target,
+                                           min_particles=setup.per_target,
+                                           max_particles=setup.max_particles,
+                                           roughening=setup.roughening),
+            extraction="measurement_only")
         #: Search values p_v of the map's nodes (eq. 10), 0 = never searched.
         self.search = sm.initial_values(setup.grid)
         self._position: np.ndarray | None = None
@@ -197,26 +212,22 @@ class PapaioannouEstimator(Estimator):
         self._tentative = np.empty((0, 4))
         self.step = -1
 
+    @property
+    def particles(self) -> ParticleSet:
+        """The particle PHD of the true targets (the filter's particles)."""
+        return self.filter.particles
+
     # ------------------------------------------------------------------ filter
     def predict(self) -> None:
         """Eq. 6 for the survivors (NCV motion, p_S); births come with the scan (eq. 6's b_k)."""
-        self.particles = predict(self.particles, self._transition, self.setup.p_s, None,
-                                 self.rng)
+        self.filter.predict()
 
     def update(self, scan: Scan) -> None:
-        """Births in S_a(s_k), eq. 8, resampling, estimates; eq. 7 and 9 on the search map."""
+        """Births in S_a(s_k), eq. 8, estimates, resampling; eq. 7 and 9 on the search map."""
         s = self.setup
         sensor = scan.sensor
-        z = check_measurements(scan.z, 2)
         last_states = self._states
-        born = (self._births_near(z, sensor) if s.measurement_births
-                else self._births(sensor))
-        particles = ParticleSet.concatenate([self.particles, born]) if len(born) else \
-            self.particles
-        states = particles.states
-        p_d = np.where(s.sensor.inside(states[:, :2], sensor), s.sensor.p_d, 0.0)
-        result = update(particles, z, lambda zz, x: self._sensor.log_likelihood(
-            zz, x[:, :2], sensor), p_d, s.sensor.clutter_intensity(z, sensor))
+        result = self.filter.update_weights(scan)
         # Measurements the particles, births included, took with weight > 0.5.
         seen = extract_by_measurement(result) if s.extraction != "square" else None
         if s.extraction == "square":
@@ -243,15 +254,11 @@ class PapaioannouEstimator(Estimator):
                 gate = max(s.hold_gate, 1e-9)
                 seen = seen[~(cdist(seen[:, :2], self._states[:, :2]) <= gate).any(axis=1)]
             self._tentative = seen
-        self.particles = resample(result.particles, self.rng, per_target=s.per_target,
-                                  min_particles=s.per_target, max_particles=s.max_particles)
-        if s.roughening > 0.0 and len(self.particles):
-            # Regularisation (Musso, Oudjane & Le Gland 2001): resampled copies of one
-            # particle are jittered apart, so a cloud the 1-degree bearing squeezed to a
-            # sliver keeps particles where the next viewpoint's bearing line may cross it.
-            p = self.particles
-            jitter = self.rng.standard_normal(p.states.shape) * s.roughening
-            self.particles = ParticleSet(p.weights, p.states + jitter, p.newborn)
+        # Resampling, and with ``roughening`` the jitter of Musso, Oudjane & Le Gland (2001):
+        # resampled copies of one particle are moved apart, so a cloud the 1-degree bearing
+        # squeezed to a sliver keeps particles where the next viewpoint's bearing line may
+        # cross it.
+        self.filter.resample()
         previous = sensor if self._position is None else self._position
         self.search = sm.update(sm.predict(self.search, s.grid, previous, s.decay), s.grid,
                                 sensor)
@@ -281,11 +288,12 @@ class PapaioannouEstimator(Estimator):
         keep = mass > 0.5
         return (w[keep] @ post.states) / mass[keep, None]
 
-    def _births_near(self, z: np.ndarray, sensor: np.ndarray) -> ParticleSet:
+    def _births_near(self, rng: np.random.Generator, z: np.ndarray,
+                     sensor: np.ndarray) -> ParticleSet:
         """The uniform birth intensity of :meth:`_births`, sampled where the measurements are.
 
         Positions are drawn from the mixture q(x) = (1/M) sum_m N(x; p(z_m), C(z_m)) of the
-        positions the M measurements imply (:meth:`~.range_bearing.RangeBearingSensor.
+        positions the M measurements imply (:meth:`~.range_bearing_model.RangeBearingSensor.
         to_positions`), velocities from the birth's own uniform law; each particle's weight
         is the importance ratio ``b(x) / (q(x) N)`` with b the uniform birth density over
         the square (``birth_mass / a^2`` per m^2), so the births' intensity is b in
@@ -300,9 +308,9 @@ class PapaioannouEstimator(Estimator):
         n = s.per_target
         pos, cov = self._sensor.to_positions(z, sensor)
         chol = np.linalg.cholesky(cov)                                    # (M, 2, 2)
-        e = self.rng.standard_normal((m, n, 2))
+        e = rng.standard_normal((m, n, 2))
         x = (pos[:, None, :] + np.einsum("mij,mnj->mni", chol, e)).reshape(-1, 2)
-        vel = (2.0 * self.rng.random((m * n, 2)) - 1.0) * s.birth_speed
+        vel = (2.0 * rng.random((m * n, 2)) - 1.0) * s.birth_speed
         d = x[:, None, :] - pos[None, :, :]                               # (N, M, 2)
         inv = np.linalg.inv(cov)
         maha = np.einsum("nmi,mij,nmj->nm", d, inv, d)
@@ -314,12 +322,17 @@ class PapaioannouEstimator(Estimator):
         return ParticleSet(w, np.concatenate([x, vel], axis=1),
                            np.full(m * n, bool(s.birth_newborn)))
 
-    def _births(self, sensor: np.ndarray) -> ParticleSet:
+    def _births(self, rng: np.random.Generator, z: np.ndarray,
+                sensor: np.ndarray) -> ParticleSet:
+        """``birth_mass`` over the sensing square S_a(sensor), particles drawn uniformly there.
+
+        Velocities uniform in ``[-birth_speed, birth_speed]^2``; ``z`` is not used.
+        """
         s = self.setup
         n = int(round(s.birth_mass * s.per_target))
         if n == 0 or s.birth_mass == 0.0:
             return ParticleSet.empty(4)
-        u = self.rng.random((n, 4))
+        u = rng.random((n, 4))
         half = 0.5 * s.sensor.side
         states = np.concatenate([sensor + (2.0 * u[:, :2] - 1.0) * half,
                                  (2.0 * u[:, 2:] - 1.0) * s.birth_speed], axis=1)
@@ -363,7 +376,7 @@ class PapaioannouEstimator(Estimator):
 
     def expected_count(self) -> float:
         """The particles' total weight (the PHD's mass)."""
-        return self.particles.mass
+        return self.filter.expected_count()
 
     def merge_search(self, values: np.ndarray) -> None:
         """Max-merge another agent's search values into this one's (Sec. V-B c)."""
@@ -372,7 +385,7 @@ class PapaioannouEstimator(Estimator):
 
     def export_state(self) -> dict[str, np.ndarray]:
         """The particles as arrays (:meth:`.smc_phd.filter.ParticleSet.to_arrays`)."""
-        return self.particles.to_arrays()
+        return self.filter.export_state()
 
 
 def _setup(scenario: Any, system: Any, **runtime: Any) -> PapaioannouSetup:

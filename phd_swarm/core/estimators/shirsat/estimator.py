@@ -18,7 +18,7 @@ robots that meet merge (eq. 6, Alg. 2-3; the ``meet_merge`` exchange calls
    at step k, updated by Z_k;
 3. update (eq. 33-38, Alg. 1 b): p_D = p_D inside the FoV disk of radius r and 0 outside,
    evaluated at each component's mean (eq. 22; ``p_d_evaluation = integrated`` averages it
-   over the component instead, :class:`.detection.DiskFov`); H = I_2, R = the scenario's
+   over the component instead, :class:`.fov_detection.DiskFov`); H = I_2, R = the scenario's
    measurement variance times I_2; clutter kappa(z) = lambda_C A_s U(z) = lambda_C for z in
    the FoV disk, 0 outside (``clutter_region = fov``; ``everywhere``: lambda_C at every z);
 4. pruning (weight <= T), merging (squared Mahalanobis distance <= U) and the cap J_max
@@ -69,8 +69,8 @@ from ...checks import check_measurements
 from ...outputs import Output
 from ...params import ParamSpec
 from ...scan import Scan
+from ...sensors.fov_detection import DiskFov
 from ..base import Estimator
-from ..detection import DiskFov
 from ..gm_phd.births import RingBirth
 from ..gm_phd.filter import GaussianMixture, GmPhdModel, extract, linear_terms, update_with_terms
 from ..gm_phd.outputs import COMPONENTS, MARKERS, observation

@@ -3,10 +3,11 @@
 - the target motion as a sampler: :func:`linear_gaussian_transition` (x' = F x + w,
   w ~ N(0, Q));
 - the measurement likelihood: :func:`linear_gaussian_log_likelihood` (z = H x + v,
-  v ~ N(0, R)); the range-bearing one is
-  :func:`.range_bearing.range_bearing_log_likelihood`;
+  v ~ N(0, R)); the range-bearing sensor's is
+  :func:`.range_bearing_model.range_bearing_log_likelihood`;
 - the detection probability: :func:`constant_p_d`; the field-of-view models of
-  :mod:`.detection` give ``at_points``;
+  :mod:`.fov_detection` give ``at_points``, a sensor part's instance
+  ``detection_probability`` (:class:`~phd_swarm.core.sensors.base.Sensor`);
 - fixed birth intensities as samplers: :func:`gaussian_birth`, :func:`uniform_birth`;
 - the measurement-driven birth of Ristic, Clark, Vo & Vo (2012):
   :func:`measurement_birth`, with :func:`gaussian_measurement_sampler` to draw a newborn's

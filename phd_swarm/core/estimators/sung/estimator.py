@@ -10,7 +10,7 @@ the order of the paper's flowchart (Fig. 4; section numbers are the paper's):
    its detections (``detections``, :mod:`.gp_detections`); the others keep the linear
    model;
 2. update (Alg. 1 step 4): p_D = p(D|F) p(F) (eq. 9) with p(F) the component's Gaussian
-   mass in the FoV disk (eq. 10, :class:`.detection.DiskFov`), the missed-detection terms
+   mass in the FoV disk (eq. 10, :class:`.fov_detection.DiskFov`), the missed-detection terms
    between the p_D thresholds pushed away from the robot (eq. 11, ``fov_rule``), the
    detection terms of Vo & Ma Table I; clutter kappa = the sensor's false-positive rate
    over the disk area;
@@ -49,8 +49,8 @@ import numpy as np
 from ... import registry
 from ...params import ParamSpec
 from ...scan import Scan
+from ...sensors.fov_detection import DiskFov
 from ..base import Estimator
-from ..detection import DiskFov
 from ..gm_phd.births import PerMeasurementBirth
 from ..gm_phd.estimator import GmPhdEstimator
 from ..gm_phd.filter import GaussianMixture, GmPhdModel, prune_and_merge, prune_and_merge_carrying

@@ -28,13 +28,13 @@ from phd_swarm.core.controllers.sat_search_track.renyi import (
     square_clutter,
 )
 from phd_swarm.core.controllers.sat_search_track.tracking import RenyiTracking
-from phd_swarm.core.estimators.detection import SquareFov
-from phd_swarm.core.estimators.range_bearing import (
+from phd_swarm.core.estimators.smc_phd.filter import ParticleSet, update
+from phd_swarm.core.sensors.fov_detection import SquareFov
+from phd_swarm.core.sensors.range_bearing_model import (
     RangeBearingSensor,
     clutter_density_square,
     range_bearing_log_likelihood,
 )
-from phd_swarm.core.estimators.smc_phd.filter import ParticleSet, update
 
 PAPER = RangeBearingSensor()
 SIDE = 10.0

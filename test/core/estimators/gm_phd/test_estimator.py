@@ -134,47 +134,13 @@ def test_empty_scan_and_nan_measurements():
         est.update(bad)
 
 
-@pytest.mark.parametrize("method", ["ekf", "ukf"])
-def test_range_bearing_estimator_finds_and_tracks_from_measurement_births(method):
-    """The Papaioannou sensor end to end, with births from the measurements.
-
-    No birth intensity: births come from the measurements (inverse range-bearing model);
-    EKF or UKF update. Two static targets in the square sensing area are found and
-    localised within the range noise (sd 1 m). Not to the 0.2 m that 25 scans would give:
-    the newborn mass proposed at every scan's measurements merges into the track and pulls
-    it by a fraction of the noise (over 20 seeds, worst of the two targets: median 0.45 m,
-    largest 1.07 m; 0.62 m without births).
-    """
-    from phd_swarm.core.estimators.range_bearing import (
-        RangeBearingMeasurement,
-        RangeBearingSensor,
-    )
-
-    rng = np.random.default_rng(5)
-    sensor_model = RangeBearingSensor()
-    targets = np.array([[3.0, 2.0], [-2.0, -3.5]])
-    sensor = np.array([0.5, 0.0])
-    est = GmPhdEstimator(_static_model(Q=1e-4 * np.eye(2)), p_d=constant_p_d(0.99),
-                         measurement=RangeBearingMeasurement(sensor_model, method=method,
-                                                             clutter_rate=2.0),
-                         birth=AdaptiveBirth(expected_births=0.5))
-    for k in range(25):
-        z = sensor_model.simulate(rng, targets, sensor)
-        est.predict()
-        est.update(_scan(k, z, sensor))
-    assert round(est.expected_count()) == 2
-    found = est.estimates()
-    d = np.linalg.norm(found[:, None] - targets[None], axis=-1)
-    assert len(found) == 2 and d.min(axis=0).max() < 1.2
-
-
 def test_limited_fov_rule_pushes_edge_components_away_on_a_miss():
     """Sung & Tokekar Alg. 1 lines 5-7, eq. 11, on a miss.
 
     mu <- mu + p_D (mu - y) for the missed-detection term of a component whose p_D lies
     between the thresholds; the others keep their means.
     """
-    from phd_swarm.core.estimators.detection import DiskFov
+    from phd_swarm.core.sensors.fov_detection import DiskFov
 
     sensor = np.array([0.0, 0.0])
     means = np.array([[25.0, 0.0], [5.0, 0.0], [60.0, 0.0]])   # edge, inside, outside
@@ -196,7 +162,7 @@ def test_limited_fov_rule_pushes_edge_components_away_on_a_miss():
 
 
 def test_the_threshold_reading_pushes_edge_components_just_until_p_d_is_the_lower_one():
-    from phd_swarm.core.estimators.detection import DiskFov
+    from phd_swarm.core.sensors.fov_detection import DiskFov
 
     sensor = np.array([10.0, -5.0])
     direction = np.array([[1.0, 0.0], [0.6, 0.8], [-0.8, 0.6], [0.0, 1.0]])
@@ -226,7 +192,7 @@ def test_the_threshold_reading_pushes_edge_components_just_until_p_d_is_the_lowe
 
 
 def test_undetected_births_keep_a_missed_term_or_are_dropped():
-    from phd_swarm.core.estimators.detection import DiskFov
+    from phd_swarm.core.sensors.fov_detection import DiskFov
 
     # A wide birth at the sensor (sd = the FoV's radius): integrated p_D = 0.9 (1 - e^-1/2).
     model = _static_model(birth_weights=[0.05], birth_means=[[0.0, 0.0]],

@@ -8,6 +8,7 @@ import pytest
 from phd_swarm.core import registry
 from phd_swarm.core.estimators.papaioannou import search_map as sm
 from phd_swarm.core.estimators.papaioannou.estimator import PapaioannouEstimator, ncv_model
+from phd_swarm.core.estimators.smc_phd.estimator import ScanBirth, SmcPhdEstimator
 from phd_swarm.core.scan import Scan
 from phd_swarm.core.sensors.square_range_bearing import simulate_scan
 from phd_swarm.sim.presets import PRESETS
@@ -139,3 +140,21 @@ def test_an_estimate_is_held_out_of_view_and_dropped_when_missed_in_view(gate):
     est.predict()
     est.update(Scan(0, 5, s, np.empty((0, 2))))                    # missed in view: 1 % stays
     assert len(est.estimates()) == 0
+
+
+def test_the_particle_phd_is_the_smc_phd_estimator_it_holds():
+    """Papaioannou composes the particle filter: its models, births and resampling."""
+    est, _ = _estimator(clutter_rate=0.0, roughening=0.2)
+    pf = est.filter
+    assert isinstance(pf, SmcPhdEstimator) and pf.rng is est.rng
+    assert isinstance(pf.birth, ScanBirth) and pf.extraction == "measurement_only"
+    r = pf.resampling
+    assert (r.per_target, r.min_particles, r.max_particles, r.roughening) == (300, 300, 6000,
+                                                                              0.2)
+    s, target = np.array([50.0, 50.0]), np.array([[53.0, 51.0]])
+    est.predict()
+    est.update(Scan(0, 0, s, _exact_scan(est.setup.sensor.model, s, target)))
+    assert est.particles is pf.particles and est.expected_count() == pf.expected_count()
+    states = np.array([[53.0, 51.0, 0.0, 0.0], [80.0, 80.0, 0.0, 0.0]])
+    np.testing.assert_array_equal(pf.p_d(states, s), [0.99, 0.0])       # the sensor's p_D
+    np.testing.assert_array_equal(est.export_state()["states"], pf.particles.states)

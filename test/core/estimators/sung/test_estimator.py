@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from phd_swarm.core import registry
-from phd_swarm.core.estimators.detection import DiskFov
 from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture
 from phd_swarm.core.estimators.sung.estimator import SungEstimator, initial_belief
 from phd_swarm.core.estimators.sung.figures import mahalanobis_to_tracks, step_figures
 from phd_swarm.core.geometry.grid import Environment
 from phd_swarm.core.scan import Scan
+from phd_swarm.core.sensors.fov_detection import DiskFov
 from phd_swarm.engines.distributed import DistributedEngine
 from phd_swarm.sim.presets import sung_tokekar
 

@@ -10,9 +10,13 @@ state's first two coordinates are the position [m]):
 - :func:`square_mass`: an axis-aligned square (Papaioannou et al.'s 10 m x 10 m area);
 
 and the detection models built on them, :class:`DiskFov` and :class:`SquareFov`, which
-follow the :data:`.gm_phd.filter.DetectionProbability` call signature
+follow the GM-PHD's call signature
+(:data:`~phd_swarm.core.estimators.gm_phd.filter.DetectionProbability`)
 ``p_d(means (J, d), covs (J, d, d), sensor (2,)) -> (J,)`` and give ``at_points`` for
 particle filters (p_D at a point: ``p_inside`` inside the FoV, 0 outside).
+
+A model of the sensor, not of a filter: the estimators that take it (``sung_gmphd``,
+``shirsat_gmphd``) and the benchmark import it from here.
 
 Accuracy (absolute): disk <= 1e-7 (worst measured 3e-8, 4e-9 for sds >= 1e-8 R), square
 <= 1e-9 (worst measured 2e-10), against adaptive-quadrature references over sds from
@@ -443,10 +447,12 @@ class _FieldOfView:
 class DiskFov(_FieldOfView):
     """p_D of a sensor that sees a disk of radius ``radius`` around itself.
 
-    Called as a :data:`.gm_phd.filter.DetectionProbability`, ``p_d(means, covs, sensor)``: with
-    ``integrate=True`` (Sung & Tokekar eq. 9-10) ``p_inside`` times the component's mass in
-    the disk (:func:`disk_mass`); with ``integrate=False`` p_D at the component's mean,
-    ``p_inside`` if the mean is within ``radius`` of the sensor (boundary included), else 0.
+    Called as a GM-PHD detection probability
+    (:data:`~phd_swarm.core.estimators.gm_phd.filter.DetectionProbability`),
+    ``p_d(means, covs, sensor)``: with ``integrate=True`` (Sung & Tokekar eq. 9-10)
+    ``p_inside`` times the component's mass in the disk (:func:`disk_mass`); with
+    ``integrate=False`` p_D at the component's mean, ``p_inside`` if the mean is within
+    ``radius`` of the sensor (boundary included), else 0.
 
     Attributes
     ----------
@@ -474,10 +480,11 @@ class DiskFov(_FieldOfView):
 class SquareFov(_FieldOfView):
     """p_D of a sensor that sees an axis-aligned square of side ``side`` centred on itself.
 
-    Papaioannou et al.'s sensing area (10 m x 10 m). Called as a
-    :data:`.gm_phd.filter.DetectionProbability`: with ``integrate=True`` ``p_inside`` times the
-    component's mass in the square (:func:`square_mass`); with ``integrate=False``
-    ``p_inside`` if the mean is in the (closed) square, else 0.
+    Papaioannou et al.'s sensing area (10 m x 10 m). Called as a GM-PHD detection
+    probability (:data:`~phd_swarm.core.estimators.gm_phd.filter.DetectionProbability`):
+    with ``integrate=True`` ``p_inside`` times the component's mass in the square
+    (:func:`square_mass`); with ``integrate=False`` ``p_inside`` if the mean is in the
+    (closed) square, else 0.
 
     Attributes
     ----------

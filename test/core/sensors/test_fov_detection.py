@@ -10,7 +10,7 @@ from scipy import integrate
 from scipy.special import ndtr
 from scipy.stats import multivariate_normal, ncx2, norm
 
-from phd_swarm.core.estimators.detection import DiskFov, SquareFov, disk_mass, square_mass
+from phd_swarm.core.sensors.fov_detection import DiskFov, SquareFov, disk_mass, square_mass
 
 R = 5.0  # disk radius / square half-width used throughout [m]
 TOL = 1e-6
