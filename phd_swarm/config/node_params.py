@@ -52,8 +52,8 @@ ROBOT = (
               "status topic before it reports ready.", low=0, high=64),
     ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for the team state and the "
               "observers before giving up [s].", low=0.1, high=3600.0),
-    ParamSpec("publish_density", True, "Publish the local PHD window on density (the "
-              "monitor needs it)."),
+    ParamSpec("publish_density", True, "Publish the local PHD window on density and "
+              "density_grid (the monitor needs it)."),
     ParamSpec("max_measurements", 10000, "Measurement sets with more entries are rejected "
               "as absurd.", low=1, high=10_000_000),
     ParamSpec("fault_drop", 0.0, "Fault injection: probability that a protocol message this "
@@ -71,7 +71,8 @@ MONITOR = (
     ParamSpec("summary_path", "", "Where to write summary.json at the end ('' for none)."),
     ParamSpec("progress_every", 10, "Log a progress line every this many steps (0: never).",
               low=0, high=1_000_000),
-    ParamSpec("publish_density", True, "Publish the team PHD on /monitor/density."),
+    ParamSpec("publish_density", True, "Publish the team PHD on /monitor/density and "
+              "/monitor/density_grid."),
     ParamSpec("publish_markers", True, "Publish /monitor/markers (cells, goals, estimates; "
               "grid nodes and meetings of a walk on a grid)."),
     ParamSpec("exit_when_done", False, "Shut down after the last step of the scenario."),

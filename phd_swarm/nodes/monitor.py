@@ -19,8 +19,9 @@ during step k is not waited for), it
    estimator part's own figures (its ``figures`` hook, e.g. Sung & Tokekar's tracks and
    Mahalanobis distances) from the views its observation declares, built from the
    robots' observed outputs (e.g. ``components`` and ``tracks``);
-3. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` (grid
-   only) and ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
+3. publishes ``/monitor/metrics``, ``/monitor/estimates``, ``/monitor/density`` and its
+   occupancy-grid view ``/monitor/density_grid`` (grid only, :mod:`phd_swarm.nodes.occupancy`)
+   and ``/monitor/markers``, and logs a progress line every ``progress_every`` steps.
 
 After the scenario's last step it writes ``summary_path`` (DESIGN.md "Outputs of a run"); a
 run in which no step was processed writes none, so it cannot pass for a result.
@@ -37,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from nav_msgs.msg import OccupancyGrid
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
@@ -44,7 +46,7 @@ from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
-from phd_swarm.nodes import completeness, convert
+from phd_swarm.nodes import completeness, convert, occupancy
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import team_markers_cdr
 from phd_swarm.nodes.observe import TeamReader, add_windows, union
@@ -141,6 +143,9 @@ class MonitorNode(Node):
         self.density_pub = (self.create_publisher(DensityGrid, T.MONITOR_DENSITY,
                                                   publisher_qos("STEP"))
                             if self.grid_phd else None)
+        self.density_grid_pub = (self.create_publisher(
+            OccupancyGrid, T.MONITOR_DENSITY_GRID,
+            publisher_qos(T.TEAM_TOPICS[T.MONITOR_DENSITY_GRID][1])) if self.grid_phd else None)
         self.markers_pub = self.create_publisher(MarkerArray, T.MONITOR_MARKERS,
                                                  publisher_qos("OBSERVATION"))
         self.create_subscription(TargetSet, T.WORLD_TRUTH, self._on_truth,
@@ -290,6 +295,8 @@ class MonitorNode(Node):
             self.density_pub.publish(convert.density_grid(
                 convert.TEAM_ID, k, self.grid, np.arange(self.grid.size), image.ravel(),
                 self.dt, self.frame_id))
+            self.density_grid_pub.publish(occupancy.occupancy_grid(
+                h, image, self.grid.env.xmin, self.grid.env.ymin, self.grid.resolution))
         if self.params["publish_markers"]:
             grid = self.grid_nodes if k % GRID_MARKERS_EVERY == 0 else None
             met = ([r for r, got in have.items() if len(got[self.meetings].met_ids)]

@@ -19,8 +19,12 @@ deep queue so that a burst is never overwritten before the executor takes it.
   steps written before. Acknowledged samples stay in the writer's history for late
   joiners; one run writes at most a few thousand per topic.
 - ``LATCHED`` (state a late joiner must see and nothing more): reliable + transient-local,
-  depth 1. No phd_swarm topic uses it today; kept for tools.
-- ``OBSERVATION`` (markers): reliable, shallow, volatile; a slow viewer holds nobody back.
+  depth 1: the occupancy-grid views of the PHD (``/monitor/density_grid``,
+  ``/robot_<id>/density_grid``), as RViz2's Map display (transient-local by default) and
+  nav2's map server have it. A new grid replaces an unacknowledged one, so a slow viewer
+  holds nobody back, and a viewer that joins late gets the latest grid at once.
+- ``OBSERVATION`` (markers, ``/diagnostics``): reliable, shallow, volatile; a slow viewer
+  holds nobody back.
 - ``CLOCK``: reliable, volatile, keep-all on the writer (so that a reliable recorder gets
   every tick); rclpy's time source subscribes best effort, depth 1, which matches and never
   holds the writer back.

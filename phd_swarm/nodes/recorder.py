@@ -20,7 +20,8 @@ Topics
     The protocol inboxes
     (``/robot_<n>/inbox``, most of a run's messages) only with ``record_inboxes``. With
     ``discover`` on, it also polls the graph every 0.5 s (wall time) and subscribes to new
-    topics under ``/clock``, ``/world/``, ``/monitor/`` and ``/robot_<n>/``: with that table
+    topics ``/clock``, ``/diagnostics`` and under ``/world/``, ``/monitor/`` and
+    ``/robot_<n>/``: with that table
     QoS if the topic is in the table (robot topics match by their relative name) and its
     publishers' offers are compatible with it, else adapted to the offers as rosbag2 does
     (reliable if every publisher is, transient-local if every publisher is; depth 100;
@@ -32,6 +33,11 @@ Completeness
     recorded and missing steps per topic), logs the verdict (an error naming the topics and
     steps when anything is missing) and stores the report as metadata
     ``phd_swarm.completeness``, where ``run_swarm`` and ``evaluate`` read it.
+Health
+    Once per wall second it reports on ``/diagnostics`` (:meth:`Recorder.health`): messages
+    written, the last step recorded, step messages missing so far per topic
+    (:class:`phd_swarm.nodes.diagnostics.GapCounter`). It records the other nodes' reports,
+    not its own (each would change the next one's count of messages written).
 Times
     ``log_time`` is the wall-clock time [ns since the Unix epoch] at which the callback
     ran. ``publish_time`` is the message's own stamp when its first field is a
@@ -81,12 +87,15 @@ from phd_swarm.logs.qos_yaml import qos_yaml
 from phd_swarm.logs.schemas import SEPARATOR, DefinitionNotFoundError, message_definition
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.diagnostics import GapCounter, RecorderHealth, recorder_status
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import ParameterError, declare
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
-#: Topics the graph poll records: /clock and everything under /world, /monitor, /robot_<n>.
-RECORDED = re.compile(r"^(?:/clock$|/world/|/monitor/|/robot_\d+/)")
+#: Topics the graph poll records: /clock, /diagnostics and everything under /world,
+#: /monitor, /robot_<n>.
+RECORDED = re.compile(r"^(?:/clock$|/diagnostics$|/world/|/monitor/|/robot_\d+/)")
 
 #: Graph poll period [s] (wall time).
 DISCOVER_PERIOD = 0.5
@@ -261,6 +270,8 @@ class Recorder(Node):
         self._steps: dict[str, set[int]] = defaultdict(set)
         self._team: dict[int, np.ndarray] = {}
         self.report: completeness.Completeness | None = None
+        #: Step messages missing so far, for /diagnostics (with a run config).
+        self._gaps: GapCounter | None = None
         #: The world's topics that must match a writer before the truth is subscribed.
         self._world_topics: list[str] = []
         self._truth_spec: T.TopicSpec | None = None
@@ -280,6 +291,8 @@ class Recorder(Node):
             self._timer = self.create_timer(DISCOVER_PERIOD, self.discover,
                                             clock=Clock(clock_type=ClockType.STEADY_TIME))
             self.discover()
+        #: Its health on /diagnostics, once per wall second (:meth:`health`).
+        self.diagnostics = DiagnosticsReporter(self, self.health, recorder_status)
         self.get_logger().info(f"recording {len(self._subs)} topics to {self.log.path}"
                                + (" (discovering more)" if self._timer else ""))
 
@@ -304,7 +317,9 @@ class Recorder(Node):
                                                 "robots": str(s.robots)})
         self._dt_ns = s.dt * 1e9
         self._robots = s.robots
-        self._step_topics = frozenset(completeness.run_step_topics(rc))
+        step_topics = completeness.run_step_topics(rc)
+        self._step_topics = frozenset(step_topics)
+        self._gaps = GapCounter(step_topics, s.robots)
         outputs = T.declared_outputs(s.system, bool(rc.param("robot", "publish_density")))
         self._robot_table = T.robot_topics(outputs)
         wait = self.params["wait_for_world"]
@@ -363,6 +378,8 @@ class Recorder(Node):
             self.get_logger().warning(f"not recording {topic} ({ros_type}): {exc}")
             return False
         callback = self._callback(topic, starts_with_stamp(ros_type))
+        if topic == T.DIAGNOSTICS:
+            callback = self._others(callback)
         if topic in self._step_topics:
             callback = self._step_callback(topic, callback)
         self._subs[topic] = self.create_subscription(msg_class, topic, callback, qos, raw=True)
@@ -385,6 +402,14 @@ class Recorder(Node):
             sec, nsec = (_STAMP_LE if data[1] & 1 else _STAMP_BE).unpack_from(data, 4)
             write(topic, data, t, sec * 1_000_000_000 + nsec if sec >= 0 else t)
         return on_stamped
+
+    def _others(self, record: Callable[[bytes], None]) -> Callable[[bytes], None]:
+        """``record`` without this recorder's own reports (see :meth:`health`)."""
+        def on_report(data: bytes) -> None:
+            reporter = getattr(self, "diagnostics", None)
+            if reporter is None or data not in reporter.sent:
+                record(data)
+        return on_report
 
     def _step_callback(self, topic: str, record: Callable[[bytes], None]
                        ) -> Callable[[bytes], None]:
@@ -431,6 +456,16 @@ class Recorder(Node):
             topics.append(self._truth_spec.name)  # never subscribed: all of it is missing
         return completeness.check(self._steps, self._team, self._robots, topics)
 
+    def health(self) -> RecorderHealth | None:
+        """What the recorder reports on ``/diagnostics``; None once the log is closed."""
+        if self.log.closed:
+            return None
+        gaps = self._gaps.update(self._steps, self._team) if self._gaps else {}
+        return RecorderHealth(
+            self.log.message_count, len(self._subs), max(self._team, default=-1), gaps,
+            self._gaps.expected if self._gaps else 0,
+            len(self._world_topics) if self._world_timer is not None else 0)
+
     def discover(self) -> None:
         """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""
         for topic, types in self.get_topic_names_and_types():
@@ -462,6 +497,7 @@ class Recorder(Node):
         """
         if self.log.closed:
             return
+        self.diagnostics.stop()
         if self._timer is not None:
             self.destroy_timer(self._timer)
         if self._world_timer is not None:

@@ -57,6 +57,10 @@ arrives, so a lost message costs time, not a robot.
 At start-up the robot waits for the world's team state to initialise its partition, and for
 ``observers`` subscribers on its status and density, then reports ``READY``. It refuses to
 start when another node already publishes this robot id's status (a duplicate robot id).
+
+Once per wall second it reports its health on ``/diagnostics`` (:meth:`RobotNode.health`,
+:mod:`phd_swarm.nodes.diagnostics`): state, step lag behind the world, contacts, timeouts,
+rejected and dropped messages, dead and revived peers, rejoins.
 """
 
 from __future__ import annotations
@@ -80,7 +84,9 @@ from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
+from phd_swarm.nodes.diagnostics import RobotHealth, robot_status
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.robot_outputs import RobotOutputs
 from phd_swarm.nodes.ros_params import ParameterError, declare, declare_scenario
 from phd_swarm.nodes.wire import wire_for
@@ -186,6 +192,8 @@ class RobotNode(Node):
         self._beat = threading.Thread(target=self._heartbeat, name=f"heartbeat_{rid}",
                                       daemon=True)
         self._beat.start()
+        #: Its health on /diagnostics, once per wall second (:meth:`health`).
+        self.diagnostics = DiagnosticsReporter(self, self.health, robot_status)
         self.get_logger().info(f"robot {rid}: system {self.scenario.system.label()}, "
                                f"{self.scenario.name}, {self.scenario.robots} robots")
 
@@ -431,6 +439,27 @@ class RobotNode(Node):
                     step=max(step, 0)))
             except Exception:  # noqa: BLE001 - the node or context is going away
                 return
+
+    def health(self) -> RobotHealth:
+        """What the robot reports on ``/diagnostics`` (:mod:`phd_swarm.nodes.diagnostics`)."""
+        f = self.filter
+        if not self.ready or self.evicted:
+            state = "starting" if not self.ready else "counted dead"
+        elif not f.done and f.step >= 0:
+            state = "stepping"
+        else:
+            state = "done" if self._finished >= self.scenario.steps - 1 else "ready"
+        stats, contacts = f.stats, getattr(f, "contacts", None)
+        return RobotHealth(
+            self.robot_id, state, step=f.step if state == "stepping" else -1,
+            finished=self._finished, world_step=max(self.teams, default=-1),
+            counted_dead=self.evicted,
+            contacts=None if contacts is None else tuple(int(c) for c in contacts),
+            timeouts=int(stats.get("timeouts", 0)), rejected=sum(self.rejections.values()),
+            dropped=int(stats.get("dropped", 0)),
+            dead_peers=tuple(sorted(int(i) for i in getattr(f, "dead", ()))),
+            rejoins=int(stats.get("rejoins", 0)),
+            revived_peers=int(stats.get("revived_peers", 0)))
 
     def destroy_node(self) -> None:
         """Stop the heartbeat thread, then destroy the node."""

@@ -15,6 +15,10 @@ the writer side with a short history, so that a message written by a publisher c
 moment ago (a new contact) still reaches the inbox
 once the two match; readers keep a deep queue so a burst is never overwritten.
 
+Health goes to ROS' standard ``/diagnostics`` (absolute, outside every namespace): the
+world, each robot and the recorder publish a ``DiagnosticArray`` there once per wall
+second (:mod:`phd_swarm.nodes.diagnostics`).
+
 A robot's other topics are those its system's parts declare (:mod:`phd_swarm.core.outputs`:
 :func:`declared_outputs`, :func:`robot_topics`), so a run subscribes to no topic its robots
 do not write.
@@ -41,7 +45,10 @@ WORLD_MARKERS = "/world/markers"
 MONITOR_METRICS = "/monitor/metrics"
 MONITOR_ESTIMATES = "/monitor/estimates"
 MONITOR_DENSITY = "/monitor/density"
+MONITOR_DENSITY_GRID = "/monitor/density_grid"
 MONITOR_MARKERS = "/monitor/markers"
+#: Health of the world, each robot and the recorder (ROS' standard diagnostics topic).
+DIAGNOSTICS = "/diagnostics"
 
 #: Inbox kinds and the message type each carries inside an InboxMessage.
 INBOX = {
@@ -96,8 +103,13 @@ ROBOT_TOPICS = {
 
 def declared_outputs(system: Any, publish_density: bool = True,
                      publish_markers: bool = True) -> tuple[Output, ...]:
-    """The outputs the parts of ``system`` declare, without those switched off."""
-    off = {"density": not publish_density, "markers": not publish_markers}
+    """The outputs the parts of ``system`` declare, without those switched off.
+
+    ``publish_density`` switches off the density window in both its forms (``density`` and
+    the viewers' ``density_grid``), ``publish_markers`` the ``markers``.
+    """
+    off = {"density": not publish_density, "density_grid": not publish_density,
+           "markers": not publish_markers}
     return system_outputs(system.parts(), [t for t, o in off.items() if o])
 
 
@@ -129,8 +141,12 @@ TEAM_TOPICS = {
                         "once per step"),
     MONITOR_DENSITY: ("phd_swarm_msgs/msg/DensityGrid", "STEP", "monitor",
                       "once per step (parameter publish_density)"),
+    MONITOR_DENSITY_GRID: ("nav_msgs/msg/OccupancyGrid", "LATCHED", "monitor",
+                           "once per step, for viewers (parameter publish_density)"),
     MONITOR_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "monitor",
                       "once per step"),
+    DIAGNOSTICS: ("diagnostic_msgs/msg/DiagnosticArray", "OBSERVATION",
+                  "world, robots, recorder", "1 Hz per node (wall clock)"),
 }
 
 

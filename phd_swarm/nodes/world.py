@@ -31,6 +31,10 @@ cause (no process seen in the graph, or running but not ready), sets :attr:`exit
 :data:`EXIT_NOT_READY` and :attr:`finished`. After the last step it publishes the final
 team state, keeps spinning ``linger`` seconds so that observers receive everything, and
 sets :attr:`finished`.
+
+Once per wall second it reports its health on ``/diagnostics`` (:meth:`WorldNode.health`,
+:mod:`phd_swarm.nodes.diagnostics`): steps done, the step it waits on and for whom, its lag
+behind real time, robots alive and dead, statuses rejected.
 """
 
 from __future__ import annotations
@@ -50,8 +54,10 @@ from phd_swarm.config.node_params import SHARED, WORLD
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
+from phd_swarm.nodes.diagnostics import WorldHealth, world_status
 from phd_swarm.nodes.markers import world_markers_cdr
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import declare, declare_scenario
 from phd_swarm.sim.world import World
 from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TargetSet, TeamState
@@ -128,6 +134,8 @@ class WorldNode(Node):
         if self.params["mode"] == "realtime":
             period = self.dt / self.params["realtime_factor"]
             self._rt_timer = self.create_timer(period, self._on_realtime_tick, clock=steady)
+        #: Its health on /diagnostics, once per wall second (:meth:`health`).
+        self.diagnostics = DiagnosticsReporter(self, self.health, world_status)
         self._publish_team(0)
         self.get_logger().info(f"world: {self.scenario.name}, {len(self.ids)} robots, "
                                f"{self.scenario.steps} steps of {self.dt} s, "
@@ -355,6 +363,28 @@ class WorldNode(Node):
     def _on_realtime_tick(self) -> None:
         if self._phase == "stepping":
             self._end_step()
+
+    def health(self) -> WorldHealth:
+        """What the world reports on ``/diagnostics`` (:mod:`phd_swarm.nodes.diagnostics`).
+
+        In real time its lag is the steps the wall clock's timer has called for since step 0
+        minus the steps done.
+        """
+        now = time.monotonic()
+        stepping = self._phase == "stepping"
+        mode = self.params["mode"]
+        lag = None
+        if mode == "realtime" and stepping:
+            period = self.dt / self.params["realtime_factor"]
+            lag = max((now - self._started_wall) / period - self.world.step_index, 0.0)
+        return WorldHealth(
+            self._phase, mode, steps_done=self.world.step_index, steps=self.scenario.steps,
+            step=self._current if stepping else -1, robots=len(self.ids),
+            ready=len(self.ready), dead=tuple(sorted(self.dead)),
+            waiting_for=tuple(sorted(self._live() - self.reported)) if stepping else (),
+            step_wait_s=now - self._phase_since if stepping else 0.0,
+            step_timeout=self.params["step_timeout"], realtime_lag=lag,
+            rejected=self.rejected, rejoins=sum(self.rejoins.values()))
 
     def _check_duplicates(self) -> None:
         for r in self.ids:

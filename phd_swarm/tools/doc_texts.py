@@ -33,10 +33,18 @@ DESCRIPTIONS: dict[str, str] = {
                             "robots alive and reporting, messages per robot.",
     topics.MONITOR_ESTIMATES: "Targets extracted from the team PHD (observation only).",
     topics.MONITOR_DENSITY: "Team PHD assembled from the robots' density windows.",
+    topics.MONITOR_DENSITY_GRID: "The team PHD as an occupancy grid for RViz2 / Foxglove: "
+                                 "0..100, 100 = a PHD of 1 target per m^2 or more "
+                                 "(`occupancy.FULL_DENSITY`, docs/ros.md); origin and "
+                                 "resolution of the grid, the world frame.",
     topics.MONITOR_MARKERS: "Cells, goals and extracted estimates; the nodes of a walk's "
                             "grid graph (every 100 steps) and the robots meeting "
                             "(Shirsat & Berman); for RViz2 / Foxglove "
                             "(`markers.team_markers`).",
+    topics.DIAGNOSTICS: "Health of the world, each robot and the recorder "
+                        "(`diagnostic_msgs`: state, step lag, contacts, timeouts, rejected "
+                        "messages, dead peers; steps and lag; messages written and gaps) at "
+                        "OK / WARN / ERROR (thresholds in docs/ros.md).",
     ROBOT_PATTERN.format("measurements"): "Measurement set Z_r^k and sensor position q^k "
                                           "from the simulated sensor; starts the robot's "
                                           "step.",

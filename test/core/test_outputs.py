@@ -32,8 +32,12 @@ def test_step_outputs_are_the_step_qos_ones():
 
 def test_each_system_declares_its_topics_in_role_order_and_a_topic_has_one_writer():
     parts = {name: make().system.parts() for name, make in PRESETS.items()}
-    assert output_topics(parts["dames_static"]) == (*NODE_OUTPUTS, "density", "cell")
-    assert output_topics(parts["dames_static"], drop=["density"]) == (*NODE_OUTPUTS, "cell")
+    assert output_topics(parts["dames_static"]) == (*NODE_OUTPUTS, "density", "density_grid",
+                                                    "cell")
+    assert output_topics(parts["dames_static"], per_step=True) == (*NODE_OUTPUTS, "density",
+                                                                   "cell")
+    assert output_topics(parts["dames_static"], drop=["density", "density_grid"]) == (
+        *NODE_OUTPUTS, "cell")
     assert output_topics(parts["sung_tokekar"], per_step=False) == ("markers",)
     assert output_topics(parts["shirsat_berman"], per_step=True) == (
         *NODE_OUTPUTS, "components", "reward_set")

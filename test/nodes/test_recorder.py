@@ -120,10 +120,12 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     rec = _recorder(ros, output=str(out), params_file=str(cfg), discover=False,
                     compression="lz4", wait_for_world=False)
     # The protocol inboxes only when asked (record_inboxes); of the declared outputs only
-    # the system's (Dames: density and cell), so no reader waits on a topic nobody writes.
-    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - 1 + 2
+    # the system's (Dames: density, density_grid and cell), so no reader waits on a topic
+    # nobody writes.
+    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - 1 + 3
     assert not any(t.endswith("/inbox") for t in rec.topics)
-    assert {"/robot_0/density", "/robot_0/cell"} <= set(rec.topics)
+    assert {"/robot_0/density", "/robot_0/density_grid", "/robot_0/cell",
+            T.DIAGNOSTICS} <= set(rec.topics)
     assert not any(t.endswith(("/components", "/plan", "/markers")) for t in rec.topics
                    if t.startswith("/robot_"))
     talker = ros.node("talker")
@@ -216,7 +218,8 @@ def test_discovers_new_topics_with_table_or_adapted_qos(ros, tmp_path):
     volatile_status = talker.create_publisher(RobotStatus, "/robot_1/status",
                                               QoSProfile(depth=10))
     talker.create_publisher(String, "/elsewhere/chatter", QoSProfile(depth=10))
-    wanted = {T.WORLD_MARKERS, "/robot_2/custom", "/robot_1/status"}
+    # /diagnostics too: the recorder reports there itself (and records the others' reports)
+    wanted = {T.WORLD_MARKERS, "/robot_2/custom", "/robot_1/status", T.DIAGNOSTICS}
     assert ros.spin_until(lambda: wanted <= set(rec.topics), timeout=10.0), rec.topics
     _matched(ros, [markers, custom, volatile_status])
     rec.discover()

@@ -99,10 +99,19 @@ DENSITY = Output(
     "The robot's PHD over a window of the grid, its owned bins (parameter "
     "`publish_density`); the monitor assembles the team PHD from them.", observed=True)
 
+#: The same window for RViz2 / Foxglove (observation traffic, not a step topic).
+DENSITY_GRID = Output(
+    "density_grid", "nav_msgs/msg/OccupancyGrid",
+    "phd_swarm.nodes.faces.grid_phd:DENSITY_GRID",
+    "The robot's density window as an occupancy grid for RViz2 / Foxglove: 0..100, 100 = a "
+    "PHD of 1 target per m^2 or more (docs/ros.md); with `density` (parameter "
+    "`publish_density`).", qos="LATCHED")
+
 registry.register(
     "estimator", "grid_phd", lambda estimator, rid: estimator, setup=_setup,
     description="Grid PHD filter (Dames 2020 eq. 3-6), distributed over the robots' cells.",
     options=OPTIONS, provides=("grid_density",),
     requires=("disk_fov", "position_measurement"),
-    outputs=(DENSITY,), observation=Observation(inputs=("density",), image="density"),
+    outputs=(DENSITY, DENSITY_GRID),
+    observation=Observation(inputs=("density",), image="density"),
     central=central_filter, runs_in_exchange=True)
