@@ -1,9 +1,13 @@
 # shellcheck shell=bash
 # Environment of phd_swarm, sourced by every script (and by users: `source scripts/env.sh`).
 #
-# - PyPI-wheel install: activates the project's virtual environment (.venv) and points the
-#   ament/CMake prefix paths at it; native install: uses the ROS already sourced
-#   (/opt/ros/jazzy/setup.bash) when there is no .venv.
+# - Decides which install this shell uses: PHD_SWARM_INSTALL, set here and nowhere else
+#   (scripts/setup.sh sources this file first and follows it):
+#     venv    the project's virtual environment .venv exists (PyPI wheels; setup.sh's default):
+#             activates it and points the ament/CMake prefix paths at it;
+#     native  no .venv, and a ROS 2 environment is sourced (ROS_DISTRO set and rclpy
+#             importable by python3, as after `source /opt/ros/jazzy/setup.bash`): uses it as is;
+#     none    neither (scripts/setup.sh then creates .venv).
 # - Sources the colcon install space if it has been built.
 # - Keeps DDS on loopback: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (or, with PHD_SWARM_DDS=profile,
 #   the repository's Fast DDS profile bound to 127.0.0.1), and a ROS_DOMAIN_ID of its
@@ -14,7 +18,22 @@ export PHD_SWARM_ROOT
 PHD_SWARM_VENV="${PHD_SWARM_VENV:-$PHD_SWARM_ROOT/.venv}"
 export PHD_SWARM_VENV
 
-if [ -x "$PHD_SWARM_VENV/bin/python" ]; then
+# venv, native or none (above). Cheap: no import, only a module lookup by python3.
+phd_swarm_install_kind() {
+  if [ -x "$PHD_SWARM_VENV/bin/python" ]; then
+    echo venv
+  elif [ -n "${ROS_DISTRO:-}" ] && command -v python3 >/dev/null 2>&1 \
+      && python3 -c 'import importlib.util, sys
+sys.exit(importlib.util.find_spec("rclpy") is None)' 2>/dev/null; then
+    echo native
+  else
+    echo none
+  fi
+}
+PHD_SWARM_INSTALL="$(phd_swarm_install_kind)"
+export PHD_SWARM_INSTALL
+
+if [ "$PHD_SWARM_INSTALL" = venv ]; then
   # shellcheck disable=SC1091
   VIRTUAL_ENV_DISABLE_PROMPT=1 source "$PHD_SWARM_VENV/bin/activate"
   case ":${AMENT_PREFIX_PATH:-}:" in

@@ -11,6 +11,6 @@ esac
 "$ROOT/scripts/setup.sh" >/dev/null
 # shellcheck source=scripts/env.sh
 source "$ROOT/scripts/env.sh"
-python -m phd_swarm.tools.check_config "$CONFIG"
-exec python -m phd_swarm.nodes.robot --ros-args --params-file "$CONFIG" \
+python3 -m phd_swarm.tools.check_config "$CONFIG"
+exec python3 -m phd_swarm.nodes.robot --ros-args --params-file "$CONFIG" \
   -r "__ns:=/robot_$ID" -p "robot_id:=$ID" "$@"

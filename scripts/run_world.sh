@@ -8,5 +8,5 @@ CONFIG="$1"; shift
 "$ROOT/scripts/setup.sh" >/dev/null
 # shellcheck source=scripts/env.sh
 source "$ROOT/scripts/env.sh"
-python -m phd_swarm.tools.check_config "$CONFIG"
-exec python -m phd_swarm.nodes.world --ros-args --params-file "$CONFIG" "$@"
+python3 -m phd_swarm.tools.check_config "$CONFIG"
+exec python3 -m phd_swarm.nodes.world --ros-args --params-file "$CONFIG" "$@"

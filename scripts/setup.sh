@@ -1,14 +1,20 @@
 #!/usr/bin/env bash
 # Set up phd_swarm on this machine; idempotent, a warm call returns in a few seconds.
 #
-# 1. Creates the git-ignored virtual environment .venv (Python 3.11: the ROS 2 Jazzy wheels
-#    are cp311) and installs the pinned requirements.lock into it (again only when the lock
-#    changed).
-# 2. Builds msg_defs (phd_swarm_msgs) and phd_swarm with colcon into the git-ignored install/
-#    (again only when a package's build inputs changed; Python sources are symlinked, so
-#    editing them needs no rebuild).
+# Which install it sets up is decided once, by scripts/env.sh (phd_swarm_install_kind), and
+# printed on stderr:
 #
-# Native ROS install instead: `source /opt/ros/jazzy/setup.bash && colcon build` (README).
+# - PyPI wheels (the default, and whenever .venv exists):
+#   1. Creates the git-ignored virtual environment .venv (Python 3.11: requirements.lock is
+#      resolved and tested on it) and installs the pinned requirements.lock into it (again
+#      only when the lock changed).
+#   2. Builds msg_defs (phd_swarm_msgs) and phd_swarm with colcon into the git-ignored
+#      install/ (again only when a package's build inputs changed; Python sources are
+#      symlinked, so editing them needs no rebuild).
+# - Native ROS 2 (no .venv, and a ROS 2 environment already sourced, e.g.
+#   `source /opt/ros/jazzy/setup.bash`): no virtual environment, no pip, any Python the ROS
+#   install uses; checks that colcon, cmake and the Python modules are there (apt and
+#   docs/install.md), then step 2 with the sourced ROS as the underlay.
 #
 # `scripts/setup.sh --build-hash` prints the hash of the build inputs and exits.
 set -euo pipefail
@@ -17,15 +23,29 @@ cd "$ROOT"
 VENV="${PHD_SWARM_VENV:-$ROOT/.venv}"
 LOCK="$ROOT/requirements.lock"
 
+# The install this call uses (venv, native or none): env.sh decides, for every script.
+set +u
+# shellcheck source=scripts/env.sh
+source "$ROOT/scripts/env.sh"
+set -u
+KIND="$PHD_SWARM_INSTALL"
+
 # Hash of what colcon builds from: the message package, the manifests and the lock. Python
-# sources and config/*.yaml are installed as symlinks (--symlink-install), so only the
-# *names* of the installed config files count: editing a config needs no rebuild, adding
-# or removing one does. (config/sweeps is not installed.)
+# sources, config/*.yaml and launch files are installed as symlinks (--symlink-install), so
+# only the *names* of the installed data files count: editing a config needs no rebuild,
+# adding or removing one does. (config/sweeps is not installed.) A native build also
+# depends on the interpreter and the ROS distribution it was built against.
 build_inputs_hash() {
   { find msg_defs -type f -print0 | sort -z | xargs -0 sha256sum
     sha256sum package.xml setup.py setup.cfg resource/phd_swarm
     find config -maxdepth 1 -type f -name '*.yaml' -printf '%f\n' 2>/dev/null | sort
-    sha256sum "$LOCK" | cut -d' ' -f1; } | sha256sum | cut -d' ' -f1
+    for dir in launch config/rviz config/foxglove; do
+      if [ -d "$dir" ]; then find "$dir" -type f -print; fi
+    done | sort
+    sha256sum "$LOCK" | cut -d' ' -f1
+    if [ "$KIND" = native ]; then
+      printf 'native %s %s\n' "${ROS_DISTRO:-}" "$(command -v python3)"
+    fi; } | sha256sum | cut -d' ' -f1
 }
 if [ "${1:-}" = "--build-hash" ]; then
   build_inputs_hash
@@ -45,38 +65,67 @@ find_python() {
   return 1
 }
 
-if [ ! -x "$VENV/bin/python" ]; then
-  PY="$(find_python)" || {
-    echo "setup.sh: Python 3.11 is required (the ROS 2 Jazzy wheels are built for cp311);" \
-         "set PHD_SWARM_PYTHON to its path" >&2
+if [ "$KIND" = native ]; then
+  PY="$(command -v python3)"
+  echo "[setup] native ROS 2 ${ROS_DISTRO}: the sourced ROS environment with $PY" \
+       "($("$PY" -c 'import platform; print("Python", platform.python_version())')), no .venv" >&2
+  missing_tools=()
+  for tool in colcon cmake; do
+    command -v "$tool" >/dev/null 2>&1 || missing_tools+=("$tool")
+  done
+  if [ ${#missing_tools[@]} -gt 0 ]; then
+    echo "setup.sh: native ROS 2 install without ${missing_tools[*]} on PATH; install" \
+         "them (sudo apt install python3-colcon-common-extensions cmake; docs/install.md)" >&2
     exit 1
-  }
-  log "creating virtual environment $VENV with $PY"
-  "$PY" -m venv "$VENV"
-fi
+  fi
+  # Modules phd_swarm imports that ROS does not bring: apt for numpy, scipy, yaml and
+  # matplotlib; mcap and mcap-ros2-support are not packaged by Ubuntu (docs/install.md).
+  missing_modules="$("$PY" -c 'import importlib.util, sys
+print(" ".join(m for m in sys.argv[1:] if importlib.util.find_spec(m) is None))' \
+    numpy scipy yaml mcap mcap_ros2 matplotlib)"
+  if [ -n "$missing_modules" ]; then
+    echo "setup.sh: $PY cannot import: $missing_modules. This script installs nothing into" \
+         "a native install; see docs/install.md (apt: python3-numpy python3-scipy" \
+         "python3-yaml python3-matplotlib; pip --user: mcap mcap-ros2-support)" >&2
+    exit 1
+  fi
+else
+  echo "[setup] PyPI wheels in $VENV (Python 3.11)" >&2
+  if [ ! -x "$VENV/bin/python" ]; then
+    PY="$(find_python)" || {
+      echo "setup.sh: Python 3.11 is required for the virtual environment (requirements.lock" \
+           "is resolved and tested on it); set PHD_SWARM_PYTHON to its path, or source a" \
+           "native ROS 2 install first (docs/install.md)" >&2
+      exit 1
+    }
+    log "creating virtual environment $VENV with $PY"
+    "$PY" -m venv "$VENV"
+  fi
+  PY="$VENV/bin/python"
 
-lock_sum="$(sha256sum "$LOCK" | cut -d' ' -f1)"
-if [ "$(cat "$VENV/.phd_swarm_lock.sha256" 2>/dev/null)" != "$lock_sum" ]; then
-  log "installing pinned requirements (requirements.lock)"
-  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$LOCK"
-  echo "$lock_sum" > "$VENV/.phd_swarm_lock.sha256"
-fi
+  lock_sum="$(sha256sum "$LOCK" | cut -d' ' -f1)"
+  if [ "$(cat "$VENV/.phd_swarm_lock.sha256" 2>/dev/null)" != "$lock_sum" ]; then
+    log "installing pinned requirements (requirements.lock)"
+    "$PY" -m pip install --quiet --disable-pip-version-check -r "$LOCK"
+    echo "$lock_sum" > "$VENV/.phd_swarm_lock.sha256"
+  fi
 
-if ! command -v cmake >/dev/null 2>&1; then
-  log "no cmake on PATH: installing the cmake wheel into the venv"
-  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "cmake>=3.22,<4"
+  if ! command -v cmake >/dev/null 2>&1; then
+    log "no cmake on PATH: installing the cmake wheel into the venv"
+    "$PY" -m pip install --quiet --disable-pip-version-check "cmake>=3.22,<4"
+  fi
 fi
 
 build_sum="$(build_inputs_hash)"
 if [ "$(cat install/.phd_swarm_build.sha256 2>/dev/null)" != "$build_sum" ]; then
   log "building msg_defs and phd_swarm with colcon"
   set +u
-  # shellcheck disable=SC1091
+  # shellcheck source=scripts/env.sh
   source "$ROOT/scripts/env.sh"
   set -u
   colcon --log-base log build --symlink-install --base-paths "$ROOT/msg_defs" "$ROOT" \
     --build-base build --install-base install \
-    --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$VENV/bin/python" \
+    --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$PY" \
     --event-handlers console_cohesion- summary+ status-
   echo "$build_sum" > install/.phd_swarm_build.sha256
 fi
