@@ -13,15 +13,15 @@ set +u
 source "$ROOT/scripts/env.sh"
 set -u
 case "$what" in
-  core) exec python "$ROOT/bench/core.py" "$@" ;;
-  comms) exec python "$ROOT/bench/comms.py" "$@" ;;
-  swarm) exec python "$ROOT/bench/swarm.py" "$@" ;;
-  engines) exec python "$ROOT/bench/engines.py" "$@" ;;
-  recorder) exec python "$ROOT/bench/recorder.py" "$@" ;;
-  sung) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/sung.py" "$@" ;;
-  shirsat) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/shirsat.py" "$@" ;;
-  discovery) exec python "$ROOT/bench/discovery.py" "$@" ;;
-  papaioannou) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python "$ROOT/bench/papaioannou.py" "$@" ;;
+  core) exec python3 "$ROOT/bench/core.py" "$@" ;;
+  comms) exec python3 "$ROOT/bench/comms.py" "$@" ;;
+  swarm) exec python3 "$ROOT/bench/swarm.py" "$@" ;;
+  engines) exec python3 "$ROOT/bench/engines.py" "$@" ;;
+  recorder) exec python3 "$ROOT/bench/recorder.py" "$@" ;;
+  sung) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python3 "$ROOT/bench/sung.py" "$@" ;;
+  shirsat) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python3 "$ROOT/bench/shirsat.py" "$@" ;;
+  discovery) exec python3 "$ROOT/bench/discovery.py" "$@" ;;
+  papaioannou) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python3 "$ROOT/bench/papaioannou.py" "$@" ;;
   estimators) if [[ " $* " == *" --no-stonesoup "* ]]; then py=python; else py="$("$ROOT/scripts/bench_stonesoup_setup.sh")"; fi; exec "$py" "$ROOT/bench/estimators.py" "$@" ;;
   *) usage ;;
 esac

@@ -23,7 +23,7 @@ set +u
 source "$ROOT/scripts/env.sh"
 set -u
 if [ -n "${CONFIG:-}" ]; then
-  python -c 'import sys
+  python3 -c 'import sys
 from phd_swarm.config import load_run_config
 try:
     load_run_config(sys.argv[1])
@@ -31,4 +31,4 @@ except ValueError as exc:
     sys.exit(f"record.sh: {exc}")' "$CONFIG"
   ARGS=(--params-file "$CONFIG" "${ARGS[@]}" -p "recorder:params_file:=$CONFIG")
 fi
-exec python -m phd_swarm.nodes.recorder --ros-args "${ARGS[@]}" "$@"
+exec python3 -m phd_swarm.nodes.recorder --ros-args "${ARGS[@]}" "$@"

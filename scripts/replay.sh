@@ -18,4 +18,4 @@ set +u
 # shellcheck source=scripts/env.sh
 source "$ROOT/scripts/env.sh"
 set -u
-exec python -m phd_swarm.tools.replay "$@"
+exec python3 -m phd_swarm.tools.replay "$@"

@@ -13,4 +13,4 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh" >/dev/null
 # shellcheck source=scripts/env.sh
 source "$ROOT/scripts/env.sh"
-exec python -m phd_swarm.tools.sweep "$@"
+exec python3 -m phd_swarm.tools.sweep "$@"
