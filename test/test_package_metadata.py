@@ -52,6 +52,9 @@ def test_changelog_citation_and_readme_name_the_same_version():
     assert date is not None and str(content).strip()
     assert str(_citation()["version"]) == version
     assert f"Version {version}" in (ROOT / "README.md").read_text()
+    msgs = get_changelog_from_path(str(ROOT / "msg_defs" / "CHANGELOG.rst"), "phd_swarm_msgs")
+    newest = next(iter(msgs.foreach_version()))[0]
+    assert newest == _xml_version(ROOT / "msg_defs" / "package.xml") == version
 
 
 def test_licence_is_the_apache_2_text_everywhere():
