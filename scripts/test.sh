@@ -34,6 +34,9 @@ elif [ $# -gt 0 ]; then
   exit $?
 fi
 rc=0
+# The real ros2 CLI, launch and launch_ros for the ROS tests (a no-op when done, or on a
+# native install; the tests' ros2_cli fixture runs it again and fails them if it fails).
+"$ROOT/scripts/ros2_tools.sh" || rc=$?
 run_pytest -m "ros and not full" || rc=$?
 run_pytest -m "not ros and not full" -n "${PHD_SWARM_TEST_WORKERS:-auto}" --dist worksteal \
   || rc=$?

@@ -41,3 +41,60 @@ def children():
 
     with ChildProcesses() as procs:
         yield procs
+
+
+@pytest.fixture(scope="session")
+def ros2_cli(request):
+    """The real ``ros2`` command for tests: a native install's, else the wheels' (issue 36).
+
+    A ``ros2`` on PATH outside this project's virtual environment is a native ROS install's
+    and is used as it is. Otherwise ``scripts/ros2_tools.sh`` installs the wheels of
+    ``../shared/ros2-cli`` into the venv and builds composition_interfaces (a no-op when
+    done), and the command runs with that build's ``local_setup.bash`` sourced. Skips when
+    neither exists. Says which one it is on the terminal and in ``.origin``.
+    """
+    import subprocess
+    import sys
+    from dataclasses import dataclass, field
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+
+    @dataclass(frozen=True)
+    class Ros2Cli:
+        """``ros2`` as a command line: ``cli("node", "list")``; ``env`` for its children."""
+
+        command: str
+        origin: str
+        env: dict[str, str] = field(default_factory=dict)
+
+        def __call__(self, *args: str) -> list[str]:
+            return [self.command, *args]
+
+    venv_bin = Path(sys.prefix) / "bin"
+    native = [p for p in (Path(d) / "ros2" for d in os.environ.get("PATH", "").split(":") if d)
+              if p.is_file() and os.access(p, os.X_OK) and p.parent != venv_bin]
+    if native:
+        cli = Ros2Cli(str(native[0]), f"native: {native[0]} (ROS_DISTRO="
+                      f"{os.environ.get('ROS_DISTRO', '?')})")
+    else:
+        tools = root / "scripts" / "ros2_tools.sh"
+        res = subprocess.run([str(tools)], capture_output=True, text=True, timeout=900)
+        assert res.returncode == 0, f"scripts/ros2_tools.sh failed:\n{res.stdout}\n{res.stderr}"
+        setup = subprocess.run([str(tools), "--setup-file"], capture_output=True, text=True,
+                               check=True).stdout.strip()
+        if not setup or not Path(setup).is_file() or not (venv_bin / "ros2").is_file():
+            pytest.skip(f"no ros2 CLI: no native ROS on PATH and none installed by "
+                        f"scripts/ros2_tools.sh ({res.stdout.strip()})")
+        dump = subprocess.run(["bash", "-c", 'source "$1" >/dev/null 2>&1; env -0', "_", setup],
+                              capture_output=True, check=True).stdout.decode()
+        sourced = dict(item.split("=", 1) for item in dump.split("\0") if "=" in item)
+        env = {k: v for k, v in sourced.items() if os.environ.get(k) != v
+               and k not in ("_", "SHLVL", "PWD", "OLDPWD")}
+        cli = Ros2Cli(str(venv_bin / "ros2"),
+                      f"wheels: ../shared/ros2-cli installed into {sys.prefix} by "
+                      f"scripts/ros2_tools.sh, composition_interfaces from {setup}", env)
+    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(f"ros2 CLI for these tests: {cli.origin}")
+    return cli

@@ -9,9 +9,33 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+
+def _profile_path() -> Path:
+    """The profile in the source tree, else the installed copy (``share/phd_swarm/config``).
+
+    A ``colcon build`` without ``--symlink-install`` installs the package without the
+    source tree beside it; setup.py installs ``config/dds/*.xml`` into the share directory.
+    """
+    relative = Path("config") / "dds" / "loopback_udp.xml"
+    source = Path(__file__).resolve().parents[2] / relative
+    if source.is_file():
+        return source
+    try:
+        from ament_index_python.packages import (
+            PackageNotFoundError,
+            get_package_share_directory,
+        )
+    except ImportError:
+        return source
+    try:
+        return Path(get_package_share_directory("phd_swarm")) / relative
+    except PackageNotFoundError:
+        return source
+
+
 #: The Fast DDS profile of ``run_swarm.sh --dds profile``: UDP on 127.0.0.1 only, 160
 #: participant ports probed, no shared memory (docs/deployment.md).
-DDS_PROFILE = Path(__file__).resolve().parents[2] / "config" / "dds" / "loopback_udp.xml"
+DDS_PROFILE = _profile_path()
 
 
 def dds_env(base: Mapping[str, str], profile: bool) -> dict[str, str]:

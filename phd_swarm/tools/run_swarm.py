@@ -7,7 +7,10 @@
    resolved parameter file to ``<out>/<name>/config.yaml``;
 2. starts the recorder and the monitor, one process per robot (or per ``P`` robots with
    :mod:`phd_swarm.nodes.team`), then the world; every child runs on loopback with the
-   caller's ROS_DOMAIN_ID, in its own process group, logging to ``logs/<node>.log``;
+   caller's ROS_DOMAIN_ID, in its own process group, logging to ``logs/<node>.log``. The
+   processes, their parameters and environment are the plan
+   :func:`phd_swarm.tools.launch_plan.swarm_plan`, which ``launch/swarm.launch.py`` starts
+   too;
 3. shows the monitor's progress lines (sim time, steps per second, OSPA, estimated vs true
    number of targets) while the world runs;
 4. when the world is done, lets the monitor write ``summary.json``, stops the recorder so
@@ -33,47 +36,42 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from phd_swarm.config import RunConfig, load_run_config
+from phd_swarm.config import RunConfig
 from phd_swarm.logs.bag_metadata import write_bag_metadata
-from phd_swarm.logs.mcap_log import LogError, read_metadata
-from phd_swarm.nodes.completeness import Completeness
-from phd_swarm.nodes.ros_params import ros_refusal
-from phd_swarm.nodes.topics import robot_namespace
+from phd_swarm.logs.mcap_log import LogError
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.tools.dds import (
-    CLIENT_VARS,
     DDS_PROFILE,
-    dds_env,
     free_udp_port,
     server_env,
     server_profile,
 )
 from phd_swarm.tools.discovery_server import UP as SERVER_UP
+from phd_swarm.tools.launch_plan import (
+    AUTO_PROFILE_PROCESSES,
+    AUTO_SERVER_PROCESSES,
+    RECORDER_STOP_GRACE,
+    STARTUP_S_PER_PROCESS,  # noqa: F401 (the plan's; re-exported under its old home)
+    STOP_GRACE,
+    SwarmOptions,
+    finish_summary,
+    fresh_run_dir,
+    ready_timeouts,  # noqa: F401 (the plan's; re-exported under its old home)
+    resolve_config,
+    robot_processes,
+    run_name,
+    swarm_plan,
+)
 from phd_swarm.tools.processes import (
     Swarm,
     stop_process_group,
 )
 
-#: With ``--discovery-server auto`` (the default), start phd_swarm's discovery server above
-#: this many processes. 50 robot processes, 2 steps: ready in 17 s instead of 61 s on 2
-#: cores, 29 s instead of 110 s on one (docs/deployment.md). Smaller runs keep simple
-#: discovery, which the ROS docs and the ros2 CLI expect.
-AUTO_SERVER_PROCESSES = 30
-
-#: Log lines that say the recorder and the monitor are up (their subscriptions made), and
-#: how long the robots' start waits for them [s].
-RECORDER_UP = "recording "
-MONITOR_UP = "monitor: watching "
+#: How long the robots' start waits for the observers to be up [s].
 OBSERVERS_UP_TIMEOUT = 60.0
-
-#: Start-up allowance per process [s]: the least ``ready_timeout`` of the world and the
-#: robots is this times the number of processes. 53 processes (50 robots) took ~130 s from
-#: the first robot's start to the world's step 0 on 2 cores (docs/deployment.md).
-STARTUP_S_PER_PROCESS = 3.0
 
 #: Default niceness of the robot processes (``--robot-nice``). A higher one gives the world,
 #: monitor and recorder, which talk to every robot, the CPU first: on one core, 50 robot
@@ -91,21 +89,8 @@ ROBOT_NICE = 0
 START_WINDOW = max(4, 4 * (os.cpu_count() or 1))
 PROCESS_UP_TIMEOUT = 60.0
 
-#: With ``--dds auto``, use the repository's Fast DDS profile above this many processes:
-#: Jazzy's LOCALHOST discovery probes 32 participant ports per host (docs/deployment.md).
-AUTO_PROFILE_PROCESSES = 30
-
 #: How long run_swarm waits for its discovery server's up line [s].
 SERVER_UP_TIMEOUT = 60.0
-
-#: Seconds a child gets to stop after SIGINT before SIGKILL, when the run is interrupted.
-STOP_GRACE = 6.0
-
-#: Seconds the recorder gets to finish its log after SIGINT before SIGKILL, also when the
-#: run is interrupted: it may wait up to 10 s for late step messages (recorder
-#: ``SETTLE_MAX``), and a killed recorder loses its last chunk. With 6 s, an interrupted
-#: run in the test suite once lost a robot's last two statuses.
-RECORDER_STOP_GRACE = 30.0
 
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
 WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
@@ -169,71 +154,18 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 def resolve(opts: argparse.Namespace) -> RunConfig:
     """The config with the command-line overrides applied (ValueError on bad values)."""
-    rc = load_run_config(opts.config)
-    s = rc.scenario
-    changes: dict[str, Any] = {}
-    if opts.robots is not None:
-        changes["robots"] = opts.robots
-    if opts.duration is not None:
-        changes["duration"] = opts.duration
-    if opts.seed is not None:
-        changes["seed"] = opts.seed
-    if opts.targets is not None:
-        t = s.targets
-        if t.kind == "clustered_walk" and t.per_cluster:
-            n = len(t.per_cluster)
-            per = tuple(opts.targets // n + (1 if i < opts.targets % n else 0)
-                        for i in range(n))
-            changes["targets"] = replace(t, count=opts.targets, per_cluster=per)
-        else:
-            changes["targets"] = replace(t, count=opts.targets)
-    try:
-        scenario = s.with_overrides(**changes) if changes else s
-        if opts.controller:
-            scenario = scenario.with_system(controller=opts.controller)
-    except ValueError as exc:
-        raise ValueError(f"{opts.config}: command-line override: {exc}") from None
-    refusal = ros_refusal(scenario.system)
-    if refusal:
-        raise ValueError(f"{opts.config}: scenario.system: {refusal}")
     robot: dict[str, Any] = {}
     for option, param in (("drop", "fault_drop"), ("delay", "fault_delay"),
                           ("delay_rounds", "fault_delay_rounds"), ("fault_seed", "fault_seed")):
         if getattr(opts, option) is not None:
             robot[param] = getattr(opts, option)
-    world = {"mode": "realtime"} if opts.realtime else {}
-    return rc.with_overrides(scenario, robot=robot, world=world)
-
-
-def _fresh_dir(parent: Path, name: str) -> Path:
-    """``parent/name``, or ``name-2``, ``name-3``... so no earlier run is overwritten."""
-    path, n = parent / name, 1
-    while path.exists():
-        n += 1
-        path = parent / f"{name}-{n}"
-    path.mkdir(parents=True)
-    return path
+    return resolve_config(opts.config, robots=opts.robots, targets=opts.targets,
+                          duration=opts.duration, seed=opts.seed, controller=opts.controller,
+                          realtime=opts.realtime, robot=robot)
 
 
 def _raise_interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
-
-
-def ready_timeouts(rc: RunConfig, processes: int) -> dict[str, float]:
-    """The world's and the robots' ``ready_timeout`` for a run of ``processes`` processes.
-
-    Start-up takes longer with more processes (imports, then DDS discovery, CPU-bound on a
-    small machine): where the config leaves a ``ready_timeout`` at its default, it is at
-    least :data:`STARTUP_S_PER_PROCESS` x ``processes``, so that a large team is not given
-    up on while it is still coming up. A ``ready_timeout`` the config sets is kept.
-    """
-    allowance = STARTUP_S_PER_PROCESS * processes
-    out = {}
-    for kind in ("world", "robot"):
-        value = float(rc.param(kind, "ready_timeout"))
-        out[kind] = value if "ready_timeout" in rc.nodes.get(kind, {}) else max(value,
-                                                                                allowance)
-    return out
 
 
 def run(opts: argparse.Namespace) -> int:
@@ -241,30 +173,17 @@ def run(opts: argparse.Namespace) -> int:
     rc = resolve(opts)
     s = rc.scenario
     controller = s.system.label()
-    name = opts.name or f"{s.name}-{controller}-r{s.robots}-s{s.seed}"
-    run_dir = _fresh_dir(Path(opts.out), name)
+    run_dir = fresh_run_dir(Path(opts.out), opts.name or run_name(rc))
     record = not opts.no_record
-    observers = 2 if record else 1
     per = max(1, opts.robots_per_process)
-    processes = -(-s.robots // per) + 2 + int(record)
-    ready = ready_timeouts(rc, processes)
-    rc = rc.with_overrides(
-        world={"observers": observers, "ready_timeout": ready["world"]},
-        robot={"observers": observers, "ready_timeout": ready["robot"]},
-        monitor={"summary_path": str(run_dir / "summary.json"), "exit_when_done": True},
-        recorder={"output": str(run_dir / "run.mcap"),
-                  "params_file": str(run_dir / "config.yaml"), "discover": False,
-                  "record_inboxes": bool(opts.record_inboxes)})
-    params = rc.write_params(run_dir / "config.yaml")
-    use_server = opts.discovery_server == "on" or (opts.discovery_server == "auto"
-                                                   and processes > AUTO_SERVER_PROCESSES)
-    # The server's clients use the profile's transport too: UDP bound to 127.0.0.1.
-    env = dds_env(os.environ, use_server or opts.dds == "profile"
-                  or (opts.dds == "auto" and processes > AUTO_PROFILE_PROCESSES))
-    env.setdefault("ROS_DOMAIN_ID", "42")
-    env["PYTHONUNBUFFERED"] = "1"
-    for var in CLIENT_VARS:
-        env.pop(var, None)
+    # The processes, their parameters and environment: the plan swarm.launch.py starts too.
+    plan = swarm_plan(rc, run_dir, SwarmOptions(
+        robots_per_process=per, record=record, record_inboxes=bool(opts.record_inboxes),
+        dds=opts.dds, discovery_server=opts.discovery_server, robot_nice=opts.robot_nice))
+    rc = plan.rc
+    params = rc.write_params(plan.params)
+    use_server = plan.use_server
+    env = dict(plan.env)
     common = ["--params-file", str(params)]
     # Its children get ``env`` as it is when each starts.
     swarm = Swarm(run_dir, env, opts.quiet, fork=not opts.no_fork_server)
@@ -299,19 +218,18 @@ def run(opts: argparse.Namespace) -> int:
         # with tens of processes starting at once, a recorder making its ~14 subscriptions
         # per robot got a slice of the CPU and was up 85 s after the robots, which had
         # given up waiting for it (50 robot processes, docs/deployment.md).
-        if record:
-            swarm.start("recorder", "phd_swarm.nodes.recorder", common,
-                        up_marker=RECORDER_UP,
-                        env={"ROS_SUPER_CLIENT": "TRUE"}
-                        if server and rc.param("recorder", "discover") else None)
-        swarm.start("monitor", "phd_swarm.nodes.monitor", common, echo=True,
-                    up_marker=MONITOR_UP)
-        late = swarm.wait_up(["recorder", "monitor"], OBSERVERS_UP_TIMEOUT)
+        for p in plan.observers:
+            swarm.start(p.name, p.module, p.ros_args(), extra=p.arguments, echo=p.echo,
+                        up_marker=p.up_marker,
+                        env={"ROS_SUPER_CLIENT": "TRUE"} if server and p.name == "recorder"
+                        and rc.param("recorder", "discover") else None)
+        late = swarm.wait_up([p.name for p in plan.observers], OBSERVERS_UP_TIMEOUT)
         if late:
             print(f"run_swarm: {' and '.join(late)} not up after {OBSERVERS_UP_TIMEOUT:g} s; "
                   "starting the robots anyway (see their logs)", file=sys.stderr)
         _start_robots(swarm, s.robots, per, common, opts.robot_nice, opts.start_window)
-        world = swarm.start("world", "phd_swarm.nodes.world", common, echo=True)
+        world = swarm.start(plan.world.name, plan.world.module, plan.world.ros_args(),
+                            extra=plan.world.arguments, echo=plan.world.echo)
         while world.poll() is None:
             time.sleep(0.2)
             for n in swarm.procs:
@@ -375,26 +293,17 @@ def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: 
     of processes; names the processes that did not come up on stderr.
     """
     t0 = time.monotonic()
-    pending = list(range(0, robots, per))
+    pending = robot_processes(robots, per, common, nice)
     total = len(pending)
     window = window if window > 0 else total
     starting: dict[str, float] = {}
     up, late, reported = 0, [], 0
     while pending or starting:
         while pending and len(starting) < window:
-            first = pending.pop(0)
-            last = min(first + per, robots) - 1
-            marker = f"robot {last}: system "
-            if per == 1:
-                name = f"robot_{first}"
-                swarm.start(name, "phd_swarm.nodes.robot",
-                            [*common, "-r", f"__ns:={robot_namespace(first)}",
-                             "-p", f"robot_id:={first}"], nice=nice, up_marker=marker)
-            else:
-                name = f"robots_{first}-{last}"
-                swarm.start(name, "phd_swarm.nodes.team", common,
-                            extra=["--ids", f"{first}-{last}"], nice=nice, up_marker=marker)
-            starting[name] = time.monotonic()
+            p = pending.pop(0)
+            swarm.start(p.name, p.module, p.ros_args(), extra=p.arguments, nice=p.nice,
+                        up_marker=p.up_marker)
+            starting[p.name] = time.monotonic()
         if window >= total:
             return
         time.sleep(0.05)
@@ -435,15 +344,6 @@ def _explain_start_failure(swarm: Swarm, run_dir: Path) -> None:
               f"{run_dir}/logs/{name}.log", file=sys.stderr)
 
 
-def log_completeness(mcap: Path) -> Completeness | None:
-    """The recorder's completeness report stored in ``mcap`` (None if there is none)."""
-    try:
-        meta = read_metadata(mcap).get("phd_swarm.completeness")
-    except (LogError, OSError):
-        return None
-    return None if meta is None else Completeness.from_dict(json.loads(meta["report"]))
-
-
 def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,
                                                                           str]:
     """Start phd_swarm's discovery server on a free loopback port; returns it and its address.
@@ -482,13 +382,8 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
     stepping = summary.pop("wall_duration_s")
     # The fork server's imports are the robot processes' start-up, done once for them all.
     robots_cpu = sum(v for k, v in cpu.items() if k.startswith("robot") or k == "fork_server")
-    report = log_completeness(run_dir / "run.mcap") if (run_dir / "run.mcap").exists() \
-        else None
-    summary["log_completeness"] = None if report is None else report.to_dict()
-    summary.update({"controller": rc.scenario.system.controller,
-                    "system": rc.scenario.system.to_dict(),
-                    "mode": rc.param("world", "mode"), "complete": summary["steps"] == s.steps,
-                    "run_dir": str(run_dir), "wall_duration_s": wall,
+    report = finish_summary(summary, rc, run_dir)
+    summary.update({"wall_duration_s": wall,
                     "stepping_wall_s": stepping,
                     "real_time_factor": (summary["sim_duration_s"] / stepping
                                          if stepping else None),
