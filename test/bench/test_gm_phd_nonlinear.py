@@ -22,13 +22,14 @@ from scipy.stats import multivariate_normal
 
 from phd_swarm.core.estimators.gm_phd.births import AdaptiveBirth
 from phd_swarm.core.estimators.gm_phd.estimator import GmPhdEstimator
-from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture, GmPhdModel, constant_p_d
-from phd_swarm.core.scan import Scan
+from phd_swarm.core.estimators.gm_phd.filter import GaussianMixture, constant_p_d
 from phd_swarm.core.sensors.range_bearing_model import (
     RangeBearingSensor,
     clutter_density_square,
     wrap_angle,
 )
+
+from ..core.estimators.gm_phd.test_estimator import _scan, _static_model
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 
@@ -465,17 +466,6 @@ def test_measurement_model_bundle():
     assert cov.shape == (2, 2, 2)
 
 
-def _static_model(**kw) -> GmPhdModel:
-    args = dict(F=np.eye(2), Q=0.01 * np.eye(2), H=np.eye(2), R=0.25 * np.eye(2), p_s=1.0,
-                birth_weights=np.empty(0), birth_means=np.empty((0, 2)),
-                birth_covs=np.empty((0, 2, 2)), clutter_intensity=1e-3)
-    args.update(kw)
-    return GmPhdModel(**args)
-
-
-def _scan(k: int, z, sensor=(0.0, 0.0)) -> Scan:
-    return Scan(robot_id=0, step=k, sensor=np.asarray(sensor, dtype=float),
-                z=np.asarray(z, dtype=float).reshape(-1, 2))
 
 
 # ------------------------------------------------------------------- in the GM-PHD estimator
