@@ -72,10 +72,11 @@ SERVER_PREFIX = "44.53.00.5f.45.50.52.4f.53.49.4d.41"
 CLIENT_VARS = ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT")
 
 
-def server_profile(port: int) -> str:
-    """A Fast DDS profile: the default participant is discovery server 0 on 127.0.0.1:port.
+def server_profile(port: int, address: str = "127.0.0.1") -> str:
+    """A Fast DDS profile: the default participant is discovery server 0 on address:port.
 
-    Its UDP transport is bound to 127.0.0.1 only, as :data:`DDS_PROFILE`'s is.
+    Its UDP transport is bound to ``address`` only (127.0.0.1, as :data:`DDS_PROFILE`'s is;
+    a host's own address with ``run_swarm.sh --hosts``).
 
     ``fast-discovery-server`` adds transports of its own that bind every interface (seen on
     this machine: 0.0.0.0 and the host's address even with ``-l 127.0.0.1`` and ``-x``), so
@@ -85,14 +86,14 @@ def server_profile(port: int) -> str:
     if not 0 < port < 65536:
         raise ValueError(f"discovery server port {port} is not a UDP port")
     return f"""<?xml version="1.0" encoding="UTF-8" ?>
-<!-- Written by phd_swarm (phd_swarm/tools/dds.py): discovery server 0 on 127.0.0.1:{port}. -->
+<!-- Written by phd_swarm (phd_swarm/tools/dds.py): discovery server 0 on {address}:{port}. -->
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
   <profiles>
     <transport_descriptors>
       <transport_descriptor>
         <transport_id>phd_swarm_server_udp</transport_id>
         <type>UDPv4</type>
-        <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+        <interfaceWhiteList><address>{address}</address></interfaceWhiteList>
         <sendBufferSize>4194304</sendBufferSize>
         <receiveBufferSize>4194304</receiveBufferSize>
       </transport_descriptor>
@@ -105,11 +106,11 @@ def server_profile(port: int) -> str:
         <builtin>
           <discovery_config><discoveryProtocol>SERVER</discoveryProtocol></discovery_config>
           <metatrafficUnicastLocatorList>
-            <locator><udpv4><address>127.0.0.1</address><port>{port}</port></udpv4></locator>
+            <locator><udpv4><address>{address}</address><port>{port}</port></udpv4></locator>
           </metatrafficUnicastLocatorList>
         </builtin>
         <defaultUnicastLocatorList>
-          <locator><udpv4><address>127.0.0.1</address></udpv4></locator>
+          <locator><udpv4><address>{address}</address></udpv4></locator>
         </defaultUnicastLocatorList>
       </rtps>
     </participant>

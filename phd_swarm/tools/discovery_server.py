@@ -1,4 +1,4 @@
-"""A Fast DDS discovery server on 127.0.0.1 for one run (``run_swarm.sh``, docs/deployment.md).
+"""A Fast DDS discovery server on 127.0.0.1 or a host's address for one run (``run_swarm.sh``).
 
 With simple discovery every participant announces itself and all its endpoints to every
 other one: at 53 processes on 2 cores that is ~16,000 discovery datagrams a second on
@@ -30,6 +30,8 @@ def main(argv: list[str] | None = None) -> int:
                                 description=__doc__.split("\n\n")[0])
     p.add_argument("--profile", required=True, type=Path, help="the server's Fast DDS profile")
     p.add_argument("--port", required=True, type=int, help="the port the profile listens on")
+    p.add_argument("--address", default="127.0.0.1",
+                   help="the address the profile listens on (default 127.0.0.1)")
     opts = p.parse_args(argv)
     for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
         if os.environ.get(var) != str(opts.profile):
@@ -50,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: rclpy.try_shutdown())
     rclpy.init()
     node = rclpy.create_node("discovery_server")
-    node.get_logger().info(f"{UP}127.0.0.1:{opts.port}")
+    node.get_logger().info(f"{UP}{opts.address}:{opts.port}")
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -20,7 +20,9 @@ Writes into ``--out`` (default: ``evaluation/`` next to the log):
 
 - ``evaluation.json``: the summary (the ``summary.json`` fields of the figures, plus the
   agreement with the monitor, whether the log was truncated, and its completeness: per
-  step topic the expected, recorded and missing steps, :mod:`phd_swarm.tools.log_check`);
+  step topic the expected, recorded and missing steps, :mod:`phd_swarm.tools.log_check`;
+  ``absences``: the spans of steps in which a robot was out of the team, and when it
+  rejoined, also printed);
   for a non-grid system also ``figures``, the mean over steps of each of the estimator's
   figures (NaN steps left out, None if none has a value: the monitor's
   :func:`~phd_swarm.nodes.monitor.figure_means`);
@@ -236,11 +238,21 @@ def missing_inputs(run: RunLog) -> str:
             + ", ".join(f"/robot_<i>/{k}" for k in kinds) + ")")
 
 
+def describe_absences(absences: list[dict[str, int | None]]) -> str:
+    """``robot 2 steps 63-222 (rejoined at 223); robot 3 steps 64-299 (never rejoined)``.
+
+    ``absences``: :meth:`~phd_swarm.tools.run_log.RunLog.absences`.
+    """
+    return "; ".join(f"robot {a['robot']} steps {a['first']}-{a['last']} "
+                     + (f"(rejoined at {a['rejoined']})" if a["rejoined"] is not None
+                        else "(never rejoined)") for a in absences)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="evaluate.sh", description="Recompute OSPA and cardinality of a recorded run "
         "from its MCAP log, and draw it.")
-    p.add_argument("log", help="the run's MCAP file (runs/<name>/run.mcap)")
+    p.add_argument("log", help="the run's MCAP file (runs/<name>/run.mcap), or its directory")
     p.add_argument("--config", help="the run's config file, for logs recorded without one")
     p.add_argument("--out", help="output directory (default: evaluation/ next to the log)")
     p.add_argument("--snapshot", type=float, action="append", metavar="T",
@@ -266,6 +278,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prog}: --every must be >= 1 and --fps > 0", file=sys.stderr)
         return 2
     start = time.monotonic()
+    if Path(args.log).is_dir():
+        args.log = str(Path(args.log) / "run.mcap")
     try:
         run = load_run(args.log, args.config)
         s = run.scenario
@@ -291,7 +305,8 @@ def main(argv: list[str] | None = None) -> int:
                "sim_duration_s": len(rows) * s.dt, **series_summary(rows),
                "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
                "monitor_agreement": agreement(rows),
-               "log_completeness": report.to_dict()}
+               "log_completeness": report.to_dict(),
+               "absences": run.absences()}
     names = figure_names(rows)
     if run.reader.figures is not None:
         summary["figures"] = figure_means(rows, names)
@@ -331,6 +346,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{summary['cardinality_est_final']} estimated / "
               f"{summary['cardinality_true_final']} true")
         print(f"log: {report.describe()}")
+        if summary["absences"]:
+            print("out of the team: " + describe_absences(summary["absences"]))
         if agree["steps_compared"]:
             print(f"live monitor: {agree['steps_compared']} steps compared, largest OSPA "
                   f"difference {agree['max_abs_ospa_difference']:.3g} m")

@@ -22,6 +22,7 @@ package (a native install has them; tests install them, ``scripts/ros2_tools.sh`
 from __future__ import annotations
 
 import json
+import shlex
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -48,6 +49,7 @@ from phd_swarm.logs.mcap_log import LogError
 from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.tools.dds import free_udp_port, server_env, server_profile
 from phd_swarm.tools.discovery_server import UP as SERVER_UP
+from phd_swarm.tools.hosts import load_layout
 from phd_swarm.tools.launch_plan import (
     NodeProcess,
     SwarmOptions,
@@ -87,6 +89,8 @@ SWARM_ARGUMENTS = {
                     "processes), localhost or profile"),
     "discovery_server": ("auto", "phd_swarm's discovery server on 127.0.0.1: auto (above 30 "
                                  "processes), on or off"),
+    "hosts": ("", "a hosts layout file: place the processes on several hosts "
+                  "(docs/deployment.md, \"Several machines\")"),
     "out": ("runs", "parent directory of the run"),
     "name": ("", "run name (default <scenario>-<controller>-r<N>-s<seed>)"),
 }
@@ -139,8 +143,12 @@ def plan_from_arguments(values: Mapping[str, str], base_env: Mapping[str, str]) 
                             values["name"] or run_name(rc))
     plan = swarm_plan(rc, run_dir, SwarmOptions(
         robots_per_process=per, record=record, record_inboxes=record_inboxes,
-        dds=values["dds"], discovery_server=values["discovery_server"]), base_env)
+        dds=values["dds"], discovery_server=values["discovery_server"],
+        hosts=load_layout(values["hosts"]) if values.get("hosts") else None), base_env)
     plan.rc.write_params(plan.params)
+    for path, text in plan.files.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
     return plan
 
 
@@ -150,15 +158,18 @@ def node_action(p: NodeProcess) -> Node:
     Its namespace and node name as ``launch_ros`` arguments (``-r __ns:=``, ``-r
     __node:=``), the parameter file and overrides as ROS arguments; on screen if ``p``
     shows progress, else in the launch log. It gets ``p.stop_grace`` s after SIGINT before
-    it is killed.
+    it is killed. On another host (``hosts:=``) its command has the host's prefix and its
+    environment the host's DDS profile.
     """
     half = f"{p.stop_grace / 2:g}"
+    prefix = [*p.prefix, *(("nice", "-n", str(p.nice)) if p.nice else ())]
     return Node(package=PACKAGE, executable=p.executable, exec_name=p.name,
                 name=p.node_name, namespace=p.namespace,
                 ros_arguments=[*p.ros_prefix,
                                *(a for k, v in p.parameters for a in ("-p", f"{k}:={v}"))],
                 arguments=list(p.arguments), output="screen" if p.echo else "log",
-                prefix=f"nice -n {p.nice}" if p.nice else None,
+                prefix=shlex.join(prefix) if prefix else None,
+                additional_env=dict(p.env) or None,
                 sigterm_timeout=half, sigkill_timeout=half)
 
 
@@ -266,15 +277,23 @@ def finish_run(run_dir: Path, rc: RunConfig) -> str:
 
 
 def _discovery_server(plan: SwarmPlan) -> tuple[ExecuteProcess, str]:
-    """phd_swarm's discovery server on a free loopback port, and its address."""
-    port = free_udp_port()
+    """phd_swarm's discovery server and its address.
+
+    On a free loopback port, or with ``hosts:=`` on the observers' host at the layout's
+    address and port.
+    """
+    if plan.hosts is None:
+        address, port, prefix = "127.0.0.1", free_udp_port(), ()
+    else:
+        host = plan.hosts.host(plan.hosts.observers)
+        address, port, prefix = host.address, plan.hosts.server_port, host.run
     profile = plan.run_dir / "discovery_server.xml"
-    profile.write_text(server_profile(port))
+    profile.write_text(server_profile(port, address))
     server = ExecuteProcess(
-        cmd=[sys.executable, "-m", "phd_swarm.tools.discovery_server", "--profile",
-             str(profile), "--port", str(port)],
+        cmd=[*prefix, sys.executable, "-m", "phd_swarm.tools.discovery_server", "--profile",
+             str(profile), "--port", str(port), "--address", address],
         name="discovery_server", env=server_env(plan.env, profile), output="log")
-    return server, f"127.0.0.1:{port}"
+    return server, f"{address}:{port}"
 
 
 def swarm_actions(plan: SwarmPlan, base_env: Mapping[str, str]) -> list[Any]:

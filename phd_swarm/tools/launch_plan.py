@@ -30,6 +30,7 @@ from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.ros_params import ros_refusal
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.tools.dds import CLIENT_VARS, dds_env
+from phd_swarm.tools.hosts import HostLayout
 
 #: The package's console scripts (setup.py ``console_scripts``, installed by colcon into
 #: ``lib/phd_swarm/`` where ``ros2 run`` finds them) that start nodes: executable -> module
@@ -114,6 +115,12 @@ class NodeProcess:
         Its niceness (robot processes, ``--robot-nice``).
     stop_grace : float
         Seconds it gets after SIGINT before it is killed [s].
+    host : str or None
+        The host it runs on (``--hosts``; None: this machine).
+    prefix : tuple of str
+        Words put before its command to run it on its host (``ip netns exec NS``).
+    env : tuple of (str, str)
+        Variables added to the run's environment for it (its host's DDS profile).
     """
 
     name: str
@@ -127,6 +134,9 @@ class NodeProcess:
     echo: bool = False
     nice: int = 0
     stop_grace: float = STOP_GRACE
+    host: str | None = None
+    prefix: tuple[str, ...] = ()
+    env: tuple[tuple[str, str], ...] = ()
 
     @property
     def module(self) -> str:
@@ -172,23 +182,29 @@ def robot_process(robot_id: int, params: str | Path | None,
                        up_marker=f"robot {robot_id}: system ", nice=nice)
 
 
-def robot_processes(robots: int, per: int, ros_prefix: Sequence[str],
+def robot_processes(robots: int | Sequence[int], per: int, ros_prefix: Sequence[str],
                     nice: int = 0) -> list[NodeProcess]:
-    """The robot processes of a team of ``robots``: one per robot, or ``per`` per process.
+    """The robot processes of a team: one per robot, or ``per`` per process.
 
-    A process of several robots runs :mod:`phd_swarm.nodes.team` (``--ids a-b``), each node
-    in its own namespace; it is up when its last robot is.
+    ``robots``: the team size (ids ``0..robots-1``), or the ids themselves (a host's
+    robots, ``--hosts``). A process of several robots runs :mod:`phd_swarm.nodes.team`
+    (``--ids a-b``, or ``--ids a,b,c`` for ids that are not a range), each node in its own
+    namespace; it is up when its last robot is.
     """
+    ids = list(range(robots)) if isinstance(robots, int) else [int(i) for i in robots]
+    step = max(1, per)
     out = []
-    for first in range(0, robots, max(1, per)):
-        last = min(first + max(1, per), robots) - 1
+    for k in range(0, len(ids), step):
+        group = ids[k:k + step]
+        first, last = group[0], group[-1]
         if per <= 1:
             out.append(robot_process(first, None, ros_prefix, nice))
-        else:
-            out.append(NodeProcess(f"robots_{first}-{last}", "team",
-                                   ros_prefix=tuple(ros_prefix),
-                                   arguments=("--ids", f"{first}-{last}"),
-                                   up_marker=f"robot {last}: system ", nice=nice))
+            continue
+        spec = (f"{first}-{last}" if group == list(range(first, last + 1))
+                else ",".join(map(str, group)))
+        out.append(NodeProcess(f"robots_{first}-{last}", "team",
+                               ros_prefix=tuple(ros_prefix), arguments=("--ids", spec),
+                               up_marker=f"robot {last}: system ", nice=nice))
     return out
 
 
@@ -314,6 +330,8 @@ class SwarmOptions:
     #: ``auto`` (above :data:`AUTO_SERVER_PROCESSES`), ``on`` or ``off``.
     discovery_server: str = "auto"
     robot_nice: int = 0
+    #: Where the processes run (``--hosts``): None for this machine, on loopback.
+    hosts: HostLayout | None = None
 
 
 @dataclass(frozen=True)
@@ -339,6 +357,10 @@ class SwarmPlan:
         Started first and up (their up markers) before the robots; then the robots.
     world : NodeProcess
         Started last: it waits for every robot and observer to be ready.
+    hosts : HostLayout or None
+        The hosts the processes are placed on (``--hosts``), None on this machine.
+    files : dict
+        Files to write before starting anything: each host's Fast DDS profile.
     """
 
     rc: RunConfig
@@ -349,6 +371,8 @@ class SwarmPlan:
     observers: tuple[NodeProcess, ...]
     robots: tuple[NodeProcess, ...]
     world: NodeProcess
+    hosts: HostLayout | None = None
+    files: dict[Path, str] = field(default_factory=dict, repr=False)
 
     @property
     def processes(self) -> tuple[NodeProcess, ...]:
@@ -397,11 +421,44 @@ def swarm_plan(rc: RunConfig, run_dir: Path, options: SwarmOptions | None = None
     for var in CLIENT_VARS:
         env.pop(var, None)
     common = params_args(params)
-    return SwarmPlan(rc=rc, run_dir=run_dir, params=params, env=env, use_server=use_server,
+    plan = SwarmPlan(rc=rc, run_dir=run_dir, params=params, env=env, use_server=use_server,
                      observers=tuple(observer_processes(params, record)),
                      robots=tuple(robot_processes(s.robots, per, common,
                                                   options.robot_nice)),
                      world=world_process(params))
+    return plan if options.hosts is None else on_hosts(plan, options.hosts, per,
+                                                       options.robot_nice)
+
+
+def on_hosts(plan: SwarmPlan, layout: HostLayout, per: int, nice: int = 0) -> SwarmPlan:
+    """``plan`` with its processes placed on ``layout``'s hosts (``run_swarm.sh --hosts``).
+
+    The world, monitor and recorder on the observers' host, the robots on theirs
+    (:meth:`HostLayout.robot_hosts`), each process with its host's prefix and its host's
+    Fast DDS profile (written to ``run_dir/dds/<host>.xml``); a discovery server, if the
+    layout asks for one, on the observers' host. ValueError if the layout does not fit the
+    team.
+    """
+    placed = layout.robot_hosts(plan.rc.scenario.robots)
+    files = {plan.run_dir / "dds" / f"{h.name}.xml": layout.profile(h.name)
+             for h in layout.hosts}
+
+    def place(p: NodeProcess, host: str) -> NodeProcess:
+        profile = str(plan.run_dir / "dds" / f"{host}.xml")
+        return replace(p, host=host, prefix=layout.host(host).run,
+                       env=(("FASTRTPS_DEFAULT_PROFILES_FILE", profile),
+                            ("FASTDDS_DEFAULT_PROFILES_FILE", profile)))
+
+    env = {k: v for k, v in plan.env.items()
+           if k not in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE")}
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "SYSTEM_DEFAULT"
+    common = params_args(plan.params)
+    robots = [place(p, host) for host, ids in placed.items()
+              for p in robot_processes(ids, per, common, nice)]
+    return replace(plan, env=env, use_server=layout.discovery == "server", hosts=layout,
+                   files=files,
+                   observers=tuple(place(p, layout.observers) for p in plan.observers),
+                   robots=tuple(robots), world=place(plan.world, layout.observers))
 
 
 def node_env(base: Mapping[str, str]) -> dict[str, str]:

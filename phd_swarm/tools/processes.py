@@ -93,19 +93,22 @@ class Swarm:
 
     def start(self, name: str, module: str, ros_args: list[str], extra: list[str] = (),
               echo: bool = False, up_marker: str | None = None, nice: int = 0,
-              env: dict[str, str] | None = None) -> subprocess.Popen | ForkedProcess:
+              env: dict[str, str] | None = None, prefix: tuple[str, ...] = ()
+              ) -> subprocess.Popen | ForkedProcess:
         """Start ``python -m module extra --ros-args ros_args`` as child ``name``.
 
         A robot module (:data:`~phd_swarm.tools.fork_server.ROBOT_MODULES`) is forked from
-        the fork server when :attr:`fork` is set.
+        the fork server when :attr:`fork` is set and it runs on this machine (no
+        ``prefix``).
 
         ``up_marker``: text of the log line that says the child is up (:meth:`wait_up`).
         ``nice``: the child's niceness (:func:`lower_priority`). ``env``: variables added to
-        the run's environment for this child.
+        the run's environment for this child. ``prefix``: words put before the command to
+        run it on another host (``ip netns exec NS``, ``--hosts``).
         """
         args = [*extra, "--ros-args", *ros_args]
         proc: subprocess.Popen | ForkedProcess
-        if self.fork and module in ROBOT_MODULES:
+        if self.fork and module in ROBOT_MODULES and not prefix:
             if self.fork_server is None:
                 log = open(self.run_dir / "logs" / "fork_server.log", "w")  # noqa: SIM115
                 self.fork_server = ForkServer.start(self.env, log, run=str(self.run_dir))
@@ -116,7 +119,7 @@ class Swarm:
             argv = [sys.executable, "-m", module, *args]
             if nice:
                 argv = ["nice", "-n", str(nice), *argv]
-            proc = subprocess.Popen(argv, env={**self.env, **(env or {})},
+            proc = subprocess.Popen([*prefix, *argv], env={**self.env, **(env or {})},
                                     start_new_session=True, stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, text=True)
         if nice:

@@ -294,6 +294,30 @@ class RunLog:
         later = self.steps.get(k + 1)
         return reporters(self.steps[k].alive, None if later is None else later.alive)
 
+    def absences(self) -> list[dict[str, int | None]]:
+        """The spans of steps in which a robot was out of the team, from the team states.
+
+        One entry per span: ``robot``, ``first`` and ``last`` (the steps the world counted
+        it dead, ``/world/robots``' ``alive``) and ``rejoined`` (the step it was alive again,
+        None if it never was). A robot whose link was cut, or whose process died, shows
+        here; the steps of the robots that stayed are unaffected.
+        """
+        out: list[dict[str, int | None]] = []
+        known = [k for k in sorted(self.steps) if self.steps[k].robots]
+        for rid in range(self.scenario.robots):
+            first = None
+            for k in known:
+                if rid not in self.steps[k].alive:
+                    if first is None:
+                        first = k
+                    last = k
+                elif first is not None:
+                    out.append({"robot": rid, "first": first, "last": last, "rejoined": k})
+                    first = None
+            if first is not None:
+                out.append({"robot": rid, "first": first, "last": last, "rejoined": None})
+        return sorted(out, key=lambda a: (a["first"], a["robot"]))
+
     def map_layer_images(self, steps: Iterable[int]) -> dict[int, np.ndarray]:
         """The exchange's map layer as an image after each of ``steps`` (none: empty).
 

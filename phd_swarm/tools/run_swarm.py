@@ -50,18 +50,19 @@ from phd_swarm.tools.dds import (
     server_profile,
 )
 from phd_swarm.tools.discovery_server import UP as SERVER_UP
+from phd_swarm.tools.hosts import HostLayout, load_layout
 from phd_swarm.tools.launch_plan import (
     AUTO_PROFILE_PROCESSES,
     AUTO_SERVER_PROCESSES,
     RECORDER_STOP_GRACE,
     STARTUP_S_PER_PROCESS,  # noqa: F401 (the plan's; re-exported under its old home)
     STOP_GRACE,
+    NodeProcess,
     SwarmOptions,
     finish_summary,
     fresh_run_dir,
     ready_timeouts,  # noqa: F401 (the plan's; re-exported under its old home)
     resolve_config,
-    robot_processes,
     run_name,
     swarm_plan,
 )
@@ -134,6 +135,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                         "processes find each other), the repository's Fast DDS profile "
                         "config/dds/loopback_udp.xml (UDP bound to 127.0.0.1, 160 ports), or "
                         f"auto: the profile above {AUTO_PROFILE_PROCESSES} processes")
+    p.add_argument("--hosts", metavar="LAYOUT",
+                   help="place the processes on several hosts: a layout file naming each "
+                        "host's address, robots and how to run a command there "
+                        "(docs/deployment.md, \"Several machines\")")
     p.add_argument("--drop", type=float, metavar="P",
                    help="fault injection: lose each protocol message with probability P")
     p.add_argument("--delay", type=float, metavar="P",
@@ -179,12 +184,15 @@ def run(opts: argparse.Namespace) -> int:
     # The processes, their parameters and environment: the plan swarm.launch.py starts too.
     plan = swarm_plan(rc, run_dir, SwarmOptions(
         robots_per_process=per, record=record, record_inboxes=bool(opts.record_inboxes),
-        dds=opts.dds, discovery_server=opts.discovery_server, robot_nice=opts.robot_nice))
+        dds=opts.dds, discovery_server=opts.discovery_server, robot_nice=opts.robot_nice,
+        hosts=None if opts.hosts is None else load_layout(opts.hosts)))
     rc = plan.rc
-    params = rc.write_params(plan.params)
+    rc.write_params(plan.params)
+    for path, text in plan.files.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
     use_server = plan.use_server
     env = dict(plan.env)
-    common = ["--params-file", str(params)]
     # Its children get ``env`` as it is when each starts.
     swarm = Swarm(run_dir, env, opts.quiet, fork=not opts.no_fork_server)
     started = time.monotonic()
@@ -199,7 +207,7 @@ def run(opts: argparse.Namespace) -> int:
         if use_server:
             # Inside the try: the server is stopped like every other child, whatever
             # happens after it started.
-            server, address = _start_discovery_server(run_dir, env)
+            server, address = _start_discovery_server(run_dir, env, plan.hosts)
             # Plain clients: each learns only the endpoints on its own topics. A super
             # client (ROS_SUPER_CLIENT) learns everything, which is what made the server do
             # worse than simple discovery in the first slice of issue 21; only the
@@ -211,7 +219,9 @@ def run(opts: argparse.Namespace) -> int:
               f"ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}"
               + (f", discovery server {env['ROS_DISCOVERY_SERVER']}" if server else "")
               + (f", Fast DDS profile {DDS_PROFILE.name}"
-                 if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT" else ""),
+                 if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SYSTEM_DEFAULT"
+                 and plan.hosts is None else "")
+              + (f", hosts {_hosts_line(plan)}" if plan.hosts else ""),
               flush=True)
         print(f"run_swarm: results in {run_dir}/", flush=True)
         # The observers first, each up (its subscriptions made) before the robots start:
@@ -219,17 +229,19 @@ def run(opts: argparse.Namespace) -> int:
         # per robot got a slice of the CPU and was up 85 s after the robots, which had
         # given up waiting for it (50 robot processes, docs/deployment.md).
         for p in plan.observers:
+            extra_env = dict(p.env)
+            if server and p.name == "recorder" and rc.param("recorder", "discover"):
+                extra_env["ROS_SUPER_CLIENT"] = "TRUE"
             swarm.start(p.name, p.module, p.ros_args(), extra=p.arguments, echo=p.echo,
-                        up_marker=p.up_marker,
-                        env={"ROS_SUPER_CLIENT": "TRUE"} if server and p.name == "recorder"
-                        and rc.param("recorder", "discover") else None)
+                        up_marker=p.up_marker, env=extra_env, prefix=p.prefix)
         late = swarm.wait_up([p.name for p in plan.observers], OBSERVERS_UP_TIMEOUT)
         if late:
             print(f"run_swarm: {' and '.join(late)} not up after {OBSERVERS_UP_TIMEOUT:g} s; "
                   "starting the robots anyway (see their logs)", file=sys.stderr)
-        _start_robots(swarm, s.robots, per, common, opts.robot_nice, opts.start_window)
+        _start_robots(swarm, list(plan.robots), opts.start_window)
         world = swarm.start(plan.world.name, plan.world.module, plan.world.ros_args(),
-                            extra=plan.world.arguments, echo=plan.world.echo)
+                            extra=plan.world.arguments, echo=plan.world.echo,
+                            env=dict(plan.world.env), prefix=plan.world.prefix)
         while world.poll() is None:
             time.sleep(0.2)
             for n in swarm.procs:
@@ -283,9 +295,8 @@ def run(opts: argparse.Namespace) -> int:
     return _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
 
 
-def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: int,
-                  window: int) -> None:
-    """Start the robot processes, at most ``window`` of them starting at a time (0: all).
+def _start_robots(swarm: Swarm, processes: list[NodeProcess], window: int) -> None:
+    """Start the robot ``processes``, at most ``window`` of them starting at a time (0: all).
 
     A process has started when its last robot logged that it is built (``robot <id>:
     system``); one that has not after :data:`PROCESS_UP_TIMEOUT` s, or exited, leaves the
@@ -293,7 +304,7 @@ def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: 
     of processes; names the processes that did not come up on stderr.
     """
     t0 = time.monotonic()
-    pending = robot_processes(robots, per, common, nice)
+    pending = list(processes)
     total = len(pending)
     window = window if window > 0 else total
     starting: dict[str, float] = {}
@@ -302,7 +313,7 @@ def _start_robots(swarm: Swarm, robots: int, per: int, common: list[str], nice: 
         while pending and len(starting) < window:
             p = pending.pop(0)
             swarm.start(p.name, p.module, p.ros_args(), extra=p.arguments, nice=p.nice,
-                        up_marker=p.up_marker)
+                        up_marker=p.up_marker, env=dict(p.env), prefix=p.prefix)
             starting[p.name] = time.monotonic()
         if window >= total:
             return
@@ -344,21 +355,40 @@ def _explain_start_failure(swarm: Swarm, run_dir: Path) -> None:
               f"{run_dir}/logs/{name}.log", file=sys.stderr)
 
 
-def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subprocess.Popen,
-                                                                          str]:
-    """Start phd_swarm's discovery server on a free loopback port; returns it and its address.
+def _hosts_line(plan) -> str:
+    """``base (10.0.0.1: world, monitor, recorder), field1 (10.0.0.2: 2 robot processes)``."""
+    parts = []
+    for h in plan.hosts.hosts:
+        names = [p.name for p in plan.processes if p.host == h.name]
+        robots = sum(1 for p in plan.robots if p.host == h.name)
+        what = [n for n in names if not n.startswith("robot")]
+        if robots:
+            what.append(f"{robots} robot process{'es' if robots > 1 else ''}")
+        parts.append(f"{h.name} ({h.address}: {', '.join(what) or 'nothing'})")
+    return "; ".join(parts) + f"; discovery {plan.hosts.discovery}"
 
-    It waits (at most :data:`SERVER_UP_TIMEOUT` s) for the server's up line, so that no
-    client starts before the server listens.
+
+def _start_discovery_server(run_dir: Path, env: dict[str, str], hosts: HostLayout | None = None
+                            ) -> tuple[subprocess.Popen, str]:
+    """Start phd_swarm's discovery server; returns it and its address.
+
+    On a free loopback port, or, with ``hosts``, on the observers' host at the layout's
+    address and port. It waits (at most :data:`SERVER_UP_TIMEOUT` s) for the server's up
+    line, so that no client starts before the server listens.
     """
-    port = free_udp_port()
+    if hosts is None:
+        address, port, prefix = "127.0.0.1", free_udp_port(), ()
+    else:
+        host = hosts.host(hosts.observers)
+        address, port, prefix = host.address, hosts.server_port, host.run
     profile = run_dir / "discovery_server.xml"
-    profile.write_text(server_profile(port))
+    profile.write_text(server_profile(port, address))
     log_path = run_dir / "logs" / "discovery_server.log"
     log_path.parent.mkdir(exist_ok=True)
     log = open(log_path, "w")  # noqa: SIM115 (the child holds it)
-    proc = subprocess.Popen([sys.executable, "-m", "phd_swarm.tools.discovery_server",
-                             "--profile", str(profile), "--port", str(port)],
+    proc = subprocess.Popen([*prefix, sys.executable, "-m", "phd_swarm.tools.discovery_server",
+                             "--profile", str(profile), "--port", str(port),
+                             "--address", address],
                             env=server_env(env, profile), stdout=log, stderr=subprocess.STDOUT,
                             start_new_session=True)
     log.close()
@@ -369,7 +399,8 @@ def _start_discovery_server(run_dir: Path, env: dict[str, str]) -> tuple[subproc
             raise RuntimeError(f"the discovery server did not come up (exit code "
                                f"{proc.returncode}); see {log_path}")
         time.sleep(0.05)
-    return proc, f"127.0.0.1:{port}"
+    return proc, f"{address}:{port}"
+
 
 def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
             cpu: dict[str, float], memory: dict[str, float]) -> int:

@@ -52,11 +52,37 @@ def test_the_arguments_make_run_swarms_plan_and_write_its_config(LA, tmp_path):
     assert rc.param("world", "observers") == 1
 
 
+def test_with_a_hosts_layout_each_node_runs_on_its_host_with_its_hosts_profile(LA, tmp_path):
+    layout = tmp_path / "hosts.yaml"
+    layout.write_text("observers: base\nhosts:\n  base: {address: 10.1.0.1}\n"
+                      "  field: {address: 10.1.0.2, run: [ip, netns, exec, field ns]}\n")
+    plan = LA.plan_from_arguments(_arguments(LA, tmp_path, robots="2", hosts=str(layout)), {})
+    assert {p.name: p.host for p in plan.processes} == {
+        "recorder": "base", "monitor": "base", "robot_0": "field", "robot_1": "field",
+        "world": "base"}
+    for path, text in plan.files.items():
+        assert path.read_text() == text
+    from launch.launch_context import LaunchContext
+
+    context = LaunchContext()
+
+    def prefix(p) -> str:   # launch keeps it private: Executable.__prefix
+        parts = LA.node_action(p).process_description._Executable__prefix
+        return "".join(part.perform(context) for part in parts)
+
+    assert prefix(plan.robots[0]) == "ip netns exec 'field ns'"   # one word, quoted
+    assert prefix(plan.world) == ""
+    env = dict((k[0].perform(context), v[0].perform(context))
+               for k, v in LA.node_action(plan.robots[0]).additional_env)
+    assert env["FASTRTPS_DEFAULT_PROFILES_FILE"] == str(plan.run_dir / "dds" / "field.xml")
+
+
 @pytest.mark.parametrize(("values", "message"), [
     ({"robots": "four"}, "robots: expected a number"),
     ({"record": "maybe"}, "record: expected true or false"),
     ({"dds": "udp"}, "dds: auto, localhost or profile"),
     ({"config": "nowhere.yaml"}, "nowhere.yaml: no such file"),
+    ({"hosts": "nowhere.yaml"}, "hosts layout nowhere.yaml"),
 ])
 def test_bad_arguments_are_named(LA, tmp_path, values, message):
     with pytest.raises(ValueError, match=message):

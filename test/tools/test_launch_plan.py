@@ -21,6 +21,7 @@ from phd_swarm.nodes.world import EXIT_NOT_READY
 from phd_swarm.tools import launch_plan as LP
 from phd_swarm.tools import run_swarm
 from phd_swarm.tools.dds import DDS_PROFILE
+from phd_swarm.tools.hosts import load_layout
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = str(ROOT / "config" / "dames_static.yaml")
@@ -123,9 +124,9 @@ class RecordingSwarm:
         RecordingSwarm.last = self
 
     def start(self, name, module, ros_args, extra=(), echo=False, up_marker=None, nice=0,
-              env=None):
+              env=None, prefix=()):
         self.started.append((name, module, [*extra, "--ros-args", *ros_args], up_marker,
-                             echo, nice))
+                             echo, nice, tuple(prefix), dict(env or {})))
         self.procs[name] = _Proc(EXIT_NOT_READY if name == "world" else None)
         return self.procs[name]
 
@@ -151,19 +152,36 @@ class RecordingSwarm:
         pass
 
 
-@pytest.mark.parametrize("extra", [[], ["--robots-per-process", "2", "--no-record"]])
+#: A layout of two hosts for run_swarm --hosts (no prefix: the recording swarm starts
+#: nothing).
+LAYOUT = """discovery: peers
+observers: base
+hosts:
+  base: {address: 127.0.0.2}
+  field: {address: 127.0.0.3, run: [ip, netns, exec, field]}
+"""
+
+
+@pytest.mark.parametrize("extra", [[], ["--robots-per-process", "2", "--no-record"],
+                                   ["--robots-per-process", "2", "--hosts", "LAYOUT"]])
 def test_run_swarm_starts_the_plans_processes(tmp_path, monkeypatch, capsys, extra):
     monkeypatch.setattr(run_swarm, "Swarm", RecordingSwarm)
     monkeypatch.setenv("ROS_DOMAIN_ID", "150")
+    if "LAYOUT" in extra:
+        (tmp_path / "hosts.yaml").write_text(LAYOUT)
+        extra = [str(tmp_path / "hosts.yaml") if a == "LAYOUT" else a for a in extra]
     opts = run_swarm.parse_args([CONFIG, "--robots", "5", "--seed", "3", "--out",
                                  str(tmp_path), "--name", "x", "--quiet", *extra])
     assert run_swarm.run(opts) == EXIT_NOT_READY
     swarm = RecordingSwarm.last
     run_dir = tmp_path / "x"
     plan = LP.swarm_plan(run_swarm.resolve(opts), run_dir, LP.SwarmOptions(
-        robots_per_process=opts.robots_per_process, record=not opts.no_record))
-    assert swarm.started == [(p.name, p.module, p.argv(), p.up_marker, p.echo, p.nice)
-                             for p in plan.processes]
+        robots_per_process=opts.robots_per_process, record=not opts.no_record,
+        hosts=None if opts.hosts is None else load_layout(opts.hosts)))
+    assert swarm.started == [(p.name, p.module, p.argv(), p.up_marker, p.echo, p.nice,
+                              p.prefix, dict(p.env)) for p in plan.processes]
+    for path, text in plan.files.items():
+        assert path.read_text() == text
     assert swarm.env == plan.env and swarm.env["ROS_DOMAIN_ID"] == "150"
     assert load_run_config(run_dir / "config.yaml").nodes == plan.rc.nodes
     assert "start-up failed" in capsys.readouterr().err

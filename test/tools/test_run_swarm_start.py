@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from phd_swarm.tools import run_swarm
+from phd_swarm.tools.launch_plan import robot_processes
 from phd_swarm.tools.run_swarm import _start_robots, parse_args
 
 
@@ -49,8 +50,7 @@ class FakeSwarm:
 def test_at_most_a_window_of_robot_processes_start_at_once(capsys, monkeypatch):
     monkeypatch.setattr(run_swarm.time, "sleep", lambda _: None)
     swarm = FakeSwarm()
-    _start_robots(swarm, robots=20, per=1, common=["--params-file", "c.yaml"], nice=0,
-                  window=4)
+    _start_robots(swarm, robot_processes(20, 1, ["--params-file", "c.yaml"]), window=4)
     assert list(swarm.procs) == [f"robot_{i}" for i in range(20)]
     assert swarm.most_starting == 4
     assert swarm.markers["robot_7"] == "robot 7: system "
@@ -62,7 +62,7 @@ def test_at_most_a_window_of_robot_processes_start_at_once(capsys, monkeypatch):
 def test_grouped_processes_are_up_when_their_last_robot_is(monkeypatch):
     monkeypatch.setattr(run_swarm.time, "sleep", lambda _: None)
     swarm = FakeSwarm()
-    _start_robots(swarm, robots=25, per=10, common=[], nice=0, window=1)
+    _start_robots(swarm, robot_processes(25, 10, []), window=1)
     assert list(swarm.procs) == ["robots_0-9", "robots_10-19", "robots_20-24"]
     assert swarm.markers["robots_20-24"] == "robot 24: system "
     assert swarm.argv["robots_10-19"][:3] == ["phd_swarm.nodes.team", "--ids", "10-19"]
@@ -70,7 +70,7 @@ def test_grouped_processes_are_up_when_their_last_robot_is(monkeypatch):
 
 def test_a_window_of_zero_starts_all_at_once_without_waiting(capsys):
     swarm = FakeSwarm(never_up=("robot_1",))
-    _start_robots(swarm, robots=6, per=1, common=[], nice=0, window=0)
+    _start_robots(swarm, robot_processes(6, 1, []), window=0)
     assert len(swarm.procs) == 6
     assert capsys.readouterr().out == ""
 
@@ -78,7 +78,7 @@ def test_a_window_of_zero_starts_all_at_once_without_waiting(capsys):
 def test_a_process_that_exits_leaves_the_window_and_is_named(capsys, monkeypatch):
     monkeypatch.setattr(run_swarm.time, "sleep", lambda _: None)
     swarm = FakeSwarm(never_up=("robot_2",))
-    _start_robots(swarm, robots=6, per=1, common=[], nice=0, window=2)
+    _start_robots(swarm, robot_processes(6, 1, []), window=2)
     assert len(swarm.procs) == 6
     captured = capsys.readouterr()
     assert "run_swarm: 5 of 6 robot processes up" in captured.out
@@ -94,5 +94,5 @@ def test_the_window_defaults_to_four_per_core_and_refuses_a_negative_one():
 
 def test_quiet_runs_print_no_start_progress(capsys, monkeypatch):
     monkeypatch.setattr(run_swarm.time, "sleep", lambda _: None)
-    _start_robots(FakeSwarm(quiet=True), robots=9, per=1, common=[], nice=0, window=2)
+    _start_robots(FakeSwarm(quiet=True), robot_processes(9, 1, []), window=2)
     assert capsys.readouterr().out == ""
