@@ -1,7 +1,7 @@
 """Parameter sweeps: the papers' box plots, trial by trial.
 
 ``scripts/sweep.sh SPEC [--quick] [--workers N] [--engine E] [--out DIR] [--plot-only]
-[--dry-run] [--recheck N]``
+[--dry-run] [--recheck N] [--scheduler ADDRESS] [--shard K/N | --merge DIR...]``
 
 SPEC is a name under ``config/sweeps/`` or a path to a spec file
 (:mod:`phd_swarm.config.sweep_spec`). The specs in the repository reproduce Dames (2020)
@@ -35,9 +35,15 @@ own):
   every session),
   and the plots and ``summary.csv`` / ``summary.md`` of :mod:`phd_swarm.tools.sweep_plots`.
 
+The trials run on a local pool of ``--workers`` processes, or on a Dask cluster
+(``--scheduler``, :mod:`phd_swarm.tools.sweep_cluster`) with the same rows. ``--shard K/N``
+runs one of N disjoint parts of the sweep into ``<out>/shard-K-of-N`` and ``--merge``
+joins such folders into ``<out>`` (:mod:`phd_swarm.tools.sweep_shard`). Progress and the
+ETA: :mod:`phd_swarm.tools.sweep_progress`.
+
 Exit codes: 0 done, 1 some trials failed (rerun to retry them) or a recheck failed, 2 bad
-spec or results that belong to another spec, 130 interrupted (finished rows are kept;
-rerun to resume).
+spec, results that belong to another spec, shards that do not merge, or a cluster that
+cannot run the sweep, 130 interrupted (finished rows are kept; rerun to resume).
 """
 
 from __future__ import annotations
@@ -48,17 +54,17 @@ import datetime as _dt
 import io
 import json
 import logging
-import math
 import multiprocessing as mp
 import os
 import resource
 import signal
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Iterable
 from pathlib import Path
-from typing import IO, Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -72,6 +78,7 @@ from phd_swarm.config.sweep_spec import (
 )
 from phd_swarm.engines import make_engine
 from phd_swarm.tools.series_arrays import pad_rows
+from phd_swarm.tools.sweep_progress import Progress, _hms
 from phd_swarm.tools.sweep_results import (
     COLUMNS,
     PROTOCOL_COLUMNS,
@@ -81,6 +88,9 @@ from phd_swarm.tools.sweep_results import (
     parse_row,
     save_series,
 )
+
+if TYPE_CHECKING:
+    from phd_swarm.tools.sweep_shard import Shard
 
 #: Threading variables set to 1 in the workers: one process per core, no oversubscription.
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
@@ -159,133 +169,60 @@ def protocol_counters(engine) -> dict[str, int]:
 
 
 class _Collect(logging.Handler):
-    """Keeps the log lines of the trial running in this worker."""
+    """Keeps the log lines of the trial running in each thread of this worker."""
 
     def __init__(self) -> None:
         super().__init__(logging.INFO)
-        self.lines: list[str] = []
+        # A list per thread (``local.lines``): a Dask worker may run several trials at once.
+        self.local = threading.local()
         self.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
 
     def emit(self, record: logging.LogRecord) -> None:
-        self.lines.append(self.format(record))
+        lines = getattr(self.local, "lines", None)
+        if lines is not None:
+            lines.append(self.format(record))
 
 
 _COLLECT = _Collect()
+
+
+def _collect_logs() -> None:
+    """Keep phd_swarm's log lines for the trial's log file (idempotent)."""
+    # The protocol's warnings (e.g. a cell that misses a neighbour) would otherwise
+    # interleave with the progress lines.
+    log = logging.getLogger("phd_swarm")
+    if _COLLECT not in log.handlers:
+        log.addHandler(_COLLECT)
+    log.setLevel(logging.INFO)
+    log.propagate = False
 
 
 def _init_worker() -> None:
     # Ctrl-C reaches the whole process group; only the parent handles it (and terminates
     # the workers), so a worker never dies half-way through writing anything.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    # The protocol's warnings (e.g. a cell that misses a neighbour) go to the trial's log
-    # file instead of interleaving with the progress lines.
-    log = logging.getLogger("phd_swarm")
-    log.addHandler(_COLLECT)
-    log.setLevel(logging.INFO)
-    log.propagate = False
+    _collect_logs()
 
 
 def _work(trial: Trial) -> tuple[Trial, dict | None, dict | None, str | None, list[str]]:
-    _COLLECT.lines = []
+    lines = _COLLECT.local.lines = []
     try:
         row, series = run_trial(trial)
-        return trial, row, series, None, _COLLECT.lines
+        return trial, row, series, None, lines
     except Exception as exc:  # noqa: BLE001 (reported, the sweep goes on)
         tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
-        return trial, None, None, tb, _COLLECT.lines
-
-
-# ---------------------------------------------------------------------------- progress
-def _hms(seconds: float) -> str:
-    if not math.isfinite(seconds):
-        return "?"
-    s = int(round(seconds))
-    if s >= 3600:
-        return f"{s // 3600}h{s % 3600 // 60:02d}m"
-    if s >= 60:
-        return f"{s // 60}m{s % 60:02d}s"
-    return f"{s}s"
-
-
-class Progress:
-    """Progress on a stream: a bar redrawn in place on a TTY, else one line per trial.
-
-    The ETA scales the time spent so far by the estimated cost still to run
-    (:meth:`Trial.cost`), so big trials count for more than small ones.
-    """
-
-    def __init__(self, name: str, todo: list[Trial], skipped: int, stream: IO[str],
-                 tty: bool | None = None) -> None:
-        self.name = name
-        self.total = len(todo) + skipped
-        self.done = skipped
-        self.failed = 0
-        self.stream = stream
-        self.tty = stream.isatty() if tty is None else tty
-        self.cost_left = sum(t.cost() for t in todo)
-        self.cost_done = 0.0
-        self.t0 = time.monotonic()
-        self._drawn = False
-
-    def eta(self) -> float:
-        """Estimated seconds to the end (inf before the first trial ends)."""
-        if self.cost_done <= 0:
-            return math.inf
-        return (time.monotonic() - self.t0) * self.cost_left / self.cost_done
-
-    def _status(self) -> str:
-        el = time.monotonic() - self.t0
-        fail = f", {self.failed} failed" if self.failed else ""
-        return (f"{self.done}/{self.total}{fail}  elapsed {_hms(el)}  "
-                f"ETA {_hms(self.eta()) if self.cost_left > 0 else '0s'}")
-
-    def tick(self) -> None:
-        """Redraw the bar (TTY only)."""
-        if not self.tty:
-            return
-        width = 28
-        filled = int(width * self.done / self.total) if self.total else width
-        bar = "#" * filled + "-" * (width - filled)
-        self.stream.write(f"\r\x1b[Ksweep {self.name} [{bar}] {self._status()}")
-        self.stream.flush()
-        self._drawn = True
-
-    def finished(self, trial: Trial, row: dict | None, error: str | None) -> None:
-        """Count a trial as done (or failed) and report it."""
-        self.cost_left -= trial.cost()
-        self.cost_done += trial.cost()
-        self.done += 1
-        if error is not None:
-            self.failed += 1
-            self.message(f"trial {trial.key} failed: {error}")
-        elif not self.tty:
-            assert row is not None
-            final = ("" if row["metric"] == "final"
-                     else f" (final {row['ospa_final']:.3f} m)")
-            self.stream.write(f"sweep {self.name}: {trial.key}: {row['metric']} OSPA "
-                              f"{row['value']:.3f} m{final}, {row['wall_s']:.1f} s | "
-                              f"{self._status()}\n")
-            self.stream.flush()
-        self.tick()
-
-    def message(self, text: str) -> None:
-        """Print a line above the bar."""
-        if self.tty and self._drawn:
-            self.stream.write("\r\x1b[K")
-        self.stream.write(text + "\n")
-        self.stream.flush()
-        self.tick()
-
-    def close(self) -> None:
-        """End the bar's line."""
-        if self.tty and self._drawn:
-            self.stream.write("\n")
-            self.stream.flush()
+        return trial, None, None, tb, lines
 
 
 # ------------------------------------------------------------------------------ sweep
-def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial], int]:
-    """Split the spec's trials into done and to-do; count stray rows.
+def run_order(trials: Iterable[Trial]) -> list[Trial]:
+    """``trials`` in the order a sweep runs them: seed by seed, the longest first in a seed."""
+    return sorted(trials, key=lambda t: (t.index, -t.cost()))
+
+
+def plan(spec: SweepSpec, results: ResultsFile, shard: Shard | None = None
+         ) -> tuple[list[Trial], list[Trial], int]:
+    """Split the spec's trials (or one ``shard`` of them) into done and to-do; count strays.
 
     Returns
     -------
@@ -295,14 +232,14 @@ def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial
         leaves every cell of the figure with the same number of seeds, give or take one,
         and the figures of a partial sweep are those of a smaller full one.
     stray : int
-        Rows of results.csv that are no trial of this spec (ignored).
+        Rows of results.csv that are no trial of this spec (or shard): ignored.
 
     Raises
     ------
     SpecError
         If a row has a trial's key but another ``config_hash``.
     """
-    trials = spec.trials_list()
+    trials = spec.trials_list() if shard is None else shard.select(spec.trials_list())
     done, todo, clash = [], [], []
     for t in trials:
         row = results.rows.get(t.key)
@@ -320,8 +257,7 @@ def plan(spec: SweepSpec, results: ResultsFile) -> tuple[list[Trial], list[Trial
             f"again.")
     keys = {t.key for t in trials}
     stray = sum(1 for k in results.rows if k not in keys)
-    todo.sort(key=lambda t: (t.index, -t.cost()))
-    return done, todo, stray
+    return done, run_order(todo), stray
 
 
 def _pool(workers: int):
@@ -342,12 +278,35 @@ def _raise_interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
+def record_result(spec: SweepSpec, results: ResultsFile, out: Path, trial: Trial,
+                  row: dict | None, series: dict | None, error: str | None,
+                  log_lines: list[str]) -> None:
+    """Write one trial's outcome: its log file (or none), then its series and its row.
+
+    The row is appended last, so a row in results.csv always has its series; a failed
+    trial (``error``) writes only its log.
+    """
+    log_file = out / "logs" / f"{trial.key}.log"
+    if log_lines or error:
+        log_file.parent.mkdir(parents=True, exist_ok=True)
+        log_file.write_text("\n".join([*log_lines, *([error] if error else [])]) + "\n")
+    elif log_file.exists():
+        log_file.unlink()
+    if error is None:
+        assert row is not None and series is not None
+        row["spec"] = spec.name
+        (out / "series").mkdir(parents=True, exist_ok=True)
+        save_series(out / "series" / f"{trial.key}.npz", series, trial.config_hash)
+        results.append(row)
+
+
 def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out: Path,
                workers: int, progress: Progress) -> tuple[dict[str, str], bool]:
     """Run ``todo`` on ``workers`` processes, writing each result as it arrives.
 
     A trial's series goes to ``out/series/<trial>.npz`` before its row is appended to
-    ``results``; its log lines (protocol warnings), if any, to ``out/logs/<trial>.log``.
+    ``results``; its log lines (protocol warnings), if any, to ``out/logs/<trial>.log``
+    (:func:`record_result`).
 
     Returns
     -------
@@ -361,8 +320,6 @@ def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out
     failed: dict[str, str] = {}
     if not todo:
         return failed, False
-    series_dir, logs_dir = out / "series", out / "logs"
-    series_dir.mkdir(parents=True, exist_ok=True)
     # Both signals are set explicitly: a process started in the background by a
     # non-interactive shell inherits SIGINT ignored, and Python keeps it so.
     old = {sig: signal.signal(sig, _raise_interrupt) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -379,19 +336,8 @@ def run_trials(spec: SweepSpec, todo: Iterable[Trial], results: ResultsFile, out
                 continue
             except StopIteration:
                 break
-            log_file = logs_dir / f"{trial.key}.log"
-            if log_lines or error:
-                logs_dir.mkdir(exist_ok=True)
-                log_file.write_text("\n".join([*log_lines, *([error] if error else [])])
-                                    + "\n")
-            elif log_file.exists():
-                log_file.unlink()
-            if error is None:
-                assert row is not None and series is not None
-                row["spec"] = spec.name
-                save_series(series_dir / f"{trial.key}.npz", series, trial.config_hash)
-                results.append(row)
-            else:
+            record_result(spec, results, out, trial, row, series, error, log_lines)
+            if error is not None:
                 failed[trial.key] = error
             progress.finished(trial, row, error)
         pool.close()
@@ -517,7 +463,26 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                         "there are several) and compare every column but the timings with "
                         "the stored rows; exit 1 if any differs or fewer than N are "
                         "finished")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the trials on the Dask cluster of this scheduler "
+                        "(tcp://HOST:PORT) instead of --workers local processes; the "
+                        "workers need this checkout and environment")
+    p.add_argument("--shard", metavar="K/N",
+                   help="run only shard K of N (every N-th trial of the spec's full list), "
+                        "into <out>/shard-K-of-N; join the shards with --merge")
+    p.add_argument("--merge", nargs="+", type=Path, metavar="DIR",
+                   help="append the rows of these shard folders to <out>/results.csv "
+                        "(refusing overlaps and rows that disagree), then plot")
     opts = p.parse_args(argv)
+    if opts.merge and (opts.shard or opts.scheduler or opts.recheck or opts.dry_run
+                       or opts.plot_only):
+        p.error("--merge runs alone (with --quick, --engine and --out)")
+    if opts.shard:
+        from phd_swarm.tools.sweep_shard import Shard
+        try:
+            opts.shard = Shard.parse(opts.shard)
+        except ValueError as exc:
+            p.error(f"--shard: {exc}")
     if opts.workers < 1:
         p.error(f"--workers must be >= 1, got {opts.workers}")
     if opts.recheck < 0:
@@ -533,13 +498,23 @@ def main(argv: list[str] | None = None) -> int:
     try:
         spec = load_spec(find_spec(opts.spec), quick=opts.quick, engine=opts.engine)
         out = opts.out or default_out(spec)
+        if opts.shard:
+            out = out / opts.shard.label
         results = ResultsFile(out / "results.csv")
-        done, todo, stray = plan(spec, results)
+        if opts.merge:
+            from phd_swarm.tools.sweep_shard import merge
+
+            added = merge(spec, opts.merge, results, out)
+            print(f"merged {added} new row(s) from {len(opts.merge)} folder(s) into "
+                  f"{results.path}", flush=True)
+        done, todo, stray = plan(spec, results, opts.shard)
     except SpecError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     total = len(done) + len(todo)
-    print(f"sweep {spec.label}: {total} trials ({len(spec.methods)} methods x "
+    shard = (f"shard {opts.shard.k}/{opts.shard.n} of the {len(spec.trials_list())} trials "
+             f"of " if opts.shard else "")
+    print(f"sweep {spec.label}: {total} trials ({shard}{len(spec.methods)} methods x "
           f"{len(spec.robots)} team sizes x {len(spec.targets)} target counts x "
           f"{len(spec.resolutions)} resolutions x {spec.trials} seeds), {len(done)} done, "
           f"{len(todo)} to run; results in {out}", flush=True)
@@ -559,18 +534,32 @@ def main(argv: list[str] | None = None) -> int:
 
     failed: dict[str, str] = {}
     interrupted = False
-    if not opts.plot_only:
+    cluster_error = None
+    if not opts.plot_only and not opts.merge:
         out.mkdir(parents=True, exist_ok=True)
         (out / "spec.json").write_text(json.dumps(spec.to_dict(), indent=2) + "\n")
         progress = Progress(spec.label, todo, len(done), sys.stderr)
-        failed, interrupted = run_trials(spec, todo, results, out, opts.workers, progress)
+        if opts.scheduler:
+            from phd_swarm.tools.sweep_cluster import ClusterError, run_on_cluster
+            try:
+                failed, interrupted = run_on_cluster(opts.scheduler, spec, todo, results,
+                                                     out, progress)
+            except ClusterError as exc:
+                cluster_error = str(exc)
+        else:
+            failed, interrupted = run_trials(spec, todo, results, out, opts.workers, progress)
         progress.close()
-        session = {"started": started, "workers": opts.workers,
+        session = {"started": started, "workers": "dask" if opts.scheduler else opts.workers,
                    "trials_run": progress.done - len(done) - len(failed),
                    "trials_failed": len(failed), "failed": failed,
                    "interrupted": interrupted, "wall_s": time.monotonic() - wall0,
-                   "cpu_s": _cpu_seconds() - cpu0}
+                   "cpu_s": _cpu_seconds() - cpu0, "scheduler": opts.scheduler,
+                   "shard": opts.shard and opts.shard.label}
         timing = _log_session(out, session)
+        if cluster_error:
+            print(f"error: {cluster_error}\n{len(results.rows)} rows kept in "
+                  f"{results.path}", file=sys.stderr)
+            return 2
         if interrupted:
             print(f"interrupted: {len(results.rows)} rows kept in {results.path}; run the "
                   f"same command again to resume", file=sys.stderr)
