@@ -72,6 +72,25 @@ SERVER_PREFIX = "44.53.00.5f.45.50.52.4f.53.49.4d.41"
 CLIENT_VARS = ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT")
 
 
+def udp_transport(transport_id: str, address: str, peers_range: int | None = None) -> str:
+    """The ``<transport_descriptors>`` of a phd_swarm profile: one UDPv4 transport on ``address``.
+
+    Bound to ``address`` only (``interfaceWhiteList``), 4 MB socket buffers, and
+    ``peers_range`` participant ports probed per initial peer when given.
+    """
+    probe = ("" if peers_range is None
+             else f"\n        <maxInitialPeersRange>{peers_range}</maxInitialPeersRange>")
+    return f"""    <transport_descriptors>
+      <transport_descriptor>
+        <transport_id>{transport_id}</transport_id>
+        <type>UDPv4</type>
+        <interfaceWhiteList><address>{address}</address></interfaceWhiteList>{probe}
+        <sendBufferSize>4194304</sendBufferSize>
+        <receiveBufferSize>4194304</receiveBufferSize>
+      </transport_descriptor>
+    </transport_descriptors>"""
+
+
 def server_profile(port: int, address: str = "127.0.0.1") -> str:
     """A Fast DDS profile: the default participant is discovery server 0 on address:port.
 
@@ -89,15 +108,7 @@ def server_profile(port: int, address: str = "127.0.0.1") -> str:
 <!-- Written by phd_swarm (phd_swarm/tools/dds.py): discovery server 0 on {address}:{port}. -->
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
   <profiles>
-    <transport_descriptors>
-      <transport_descriptor>
-        <transport_id>phd_swarm_server_udp</transport_id>
-        <type>UDPv4</type>
-        <interfaceWhiteList><address>{address}</address></interfaceWhiteList>
-        <sendBufferSize>4194304</sendBufferSize>
-        <receiveBufferSize>4194304</receiveBufferSize>
-      </transport_descriptor>
-    </transport_descriptors>
+{udp_transport("phd_swarm_server_udp", address)}
     <participant profile_name="phd_swarm_discovery_server" is_default_profile="true">
       <rtps>
         <prefix>{SERVER_PREFIX}</prefix>

@@ -38,6 +38,9 @@ from typing import Any
 
 import yaml
 
+from phd_swarm.nodes.team import parse_ids
+from phd_swarm.tools.dds import udp_transport
+
 #: Discovery across hosts: simple discovery with the hosts as initial peers, or a server.
 DISCOVERY = ("peers", "server")
 
@@ -46,31 +49,20 @@ DEFAULT_SERVER_PORT = 11811
 
 
 def parse_robot_ids(value: Any, where: str) -> tuple[int, ...]:
-    """Robot ids from ``3``, ``"0-9"``, ``"0,2,5-7"`` or ``[0, 1, 2]`` (errors name ``where``)."""
-    parts: list[Any]
-    if isinstance(value, bool):
-        raise ValueError(f"{where}: robot ids, got {value!r}")
-    if isinstance(value, int):
-        parts = [value]
-    elif isinstance(value, str):
-        parts = [p.strip() for p in value.split(",") if p.strip()]
-    elif isinstance(value, list):
-        parts = value
-    else:
+    """Robot ids from ``3``, ``"0-9"``, ``"0,2,5-7"`` or ``[0, 1, 2]`` (errors name ``where``).
+
+    The team process's ``--ids`` rule (:func:`phd_swarm.nodes.team.parse_ids`); an empty
+    list is no robots.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | str | list):
         raise ValueError(f"{where}: robot ids (0-9, \"0,2,5-7\" or a list), got {value!r}")
-    ids: list[int] = []
-    for part in parts:
-        if isinstance(part, int) and not isinstance(part, bool):
-            ids.append(part)
-            continue
-        lo, sep, hi = str(part).partition("-")
-        try:
-            ids.extend(range(int(lo), int(hi) + 1) if sep else [int(lo)])
-        except ValueError:
-            raise ValueError(f"{where}: {part!r} is not a robot id or a range a-b") from None
-    if len(set(ids)) != len(ids) or any(i < 0 for i in ids):
-        raise ValueError(f"{where}: robot ids must be distinct and >= 0, got {value!r}")
-    return tuple(ids)
+    if value == []:
+        return ()
+    text = ",".join(map(str, value)) if isinstance(value, list) else str(value)
+    try:
+        return tuple(parse_ids(text))
+    except ValueError as exc:
+        raise ValueError(f"{where}: {str(exc).removeprefix('--ids: ')}") from None
 
 
 @dataclass(frozen=True)
@@ -240,16 +232,7 @@ def host_profile(address: str, peers: Sequence[str]) -> str:
 <!-- Written by phd_swarm (phd_swarm/tools/hosts.py): the host at {address}. -->
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
   <profiles>
-    <transport_descriptors>
-      <transport_descriptor>
-        <transport_id>phd_swarm_host_udp</transport_id>
-        <type>UDPv4</type>
-        <interfaceWhiteList><address>{address}</address></interfaceWhiteList>
-        <maxInitialPeersRange>160</maxInitialPeersRange>
-        <sendBufferSize>4194304</sendBufferSize>
-        <receiveBufferSize>4194304</receiveBufferSize>
-      </transport_descriptor>
-    </transport_descriptors>
+{udp_transport("phd_swarm_host_udp", address, peers_range=160)}
     <participant profile_name="phd_swarm_host" is_default_profile="true">
       <rtps>
         <useBuiltinTransports>false</useBuiltinTransports>

@@ -7,7 +7,6 @@ by PID whatever happens (:class:`phd_swarm.tools.sweep_cluster.DaskProcesses`).
 
 from __future__ import annotations
 
-import csv
 import ipaddress
 import os
 import signal
@@ -29,6 +28,8 @@ from phd_swarm.tools.sweep_cluster import (
     check_workers,
     worker_report,
 )
+
+from .test_sweep_shard import _rows, _without_timing
 
 #: On the distributed engine: 12 trials of about a second in the quick form, so that a
 #: sweep can be interrupted, or lose a worker, half-way.
@@ -55,16 +56,6 @@ TRIALS = 12
 
 
 # --------------------------------------------------------------------------- helpers
-def _rows(path: Path) -> list[dict[str, str]]:
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def _without_timing(rows: list[dict[str, str]]) -> dict[str, dict[str, str]]:
-    out = {r["trial"]: {c: v for c, v in r.items() if c not in sweep_results.TIMING_COLUMNS}
-           for r in rows}
-    assert len(out) == len(rows), "a trial has two rows"
-    return out
 
 
 def _assert_same_sweep(out: Path, reference: Path) -> None:
