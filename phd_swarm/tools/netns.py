@@ -86,7 +86,7 @@ class HostNetwork:
             raise ValueError(f"hosts: 1-250 distinct names, got {list(names)}")
         serial = next(_serial)
         tag = f"{os.getpid() % 100000}{serial}"
-        self.prefix = f"phd{tag}-"
+        self.prefix = f"swarm{tag}-"
         third = (os.getpid() + serial) % 250 + 1
         self.subnet = f"10.213.{third}.0/24"
         self.switch = f"{self.prefix}switch"
