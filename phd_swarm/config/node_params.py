@@ -48,6 +48,11 @@ ROBOT = (
     ParamSpec("timeout_ticks", 5, "Rounds without an answer before an awaited peer not "
               "heard from in that time (keep-alives included) is declared dead.", low=1,
               high=1000),
+    ParamSpec("revive_every", 1, "Real time: a peer this robot declared dead on silence is "
+              "admitted again (if the world says it is alive) only at steps k with k mod "
+              "revive_every = 0, the same for every robot; the world's own verdicts count at "
+              "once. run_swarm sets the world's step_timeout in steps in real time; 1: every "
+              "step (lockstep's rule).", low=1, high=1_000_000),
     ParamSpec("observers", 0, "Number of observers that must have matched this robot's "
               "status topic before it reports ready.", low=0, high=64),
     ParamSpec("ready_timeout", 60.0, "Wall seconds to wait for the team state and the "

@@ -153,9 +153,17 @@ class Agent:
         self.exchange.initialise(ids, positions)
 
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
-        """The world's membership at the start of ``step`` (who died, who came back)."""
-        self.exchange.observe_team(step, ids, positions, alive)
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
+        """The world's membership at the start of ``step`` (who died, who came back).
+
+        ``keep_dead``: see :meth:`phd_swarm.core.exchange.base.Exchange.observe_team`.
+        """
+        self.exchange.observe_team(step, ids, positions, alive, keep_dead)
+
+    @property
+    def dead_peers(self) -> frozenset[int]:
+        """The robots the exchange holds for dead."""
+        return self.exchange.dead_peers
 
     def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
                alive: np.ndarray) -> None:

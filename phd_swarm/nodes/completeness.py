@@ -16,8 +16,15 @@ topic                                       expected steps
 ``/robot_<r>/measurements``, ``pose``       k < K with r alive at k (the world scans it)
 ``/robot_<r>/status`` (``STEP_DONE``),      k < K with r alive at k and at k+1 (a robot the
 ``goal``, ``estimates`` and the step        world still counts alive after step k reported
-outputs its parts declare (``density``...)  step k)
+outputs its parts declare (``density``...)  step k); in real time, alive at k..k+W
 ==========================================  ===================================================
+
+In real time the world does not wait for a report: it counts a silent robot dead only
+after ``step_timeout`` wall seconds, W steps later (:func:`verdict_window`), so a robot
+counted dead at step k may have stopped reporting at any step from k-W on (its host cut off,
+say): its outputs are expected at the steps after which the world still counted it alive
+for W steps. In lockstep W = 1: the world waits for every report, and a robot that does not
+report step k is dead at k+1.
 
 Only topics whose QoS in :mod:`phd_swarm.nodes.topics` (or in the declaration of an
 output, :mod:`phd_swarm.core.outputs`) is ``STEP`` (one message per step,
@@ -219,6 +226,30 @@ def reporters(alive_at_k, alive_at_next=None):
     return alive_at_k if alive_at_next is None else alive_at_k & alive_at_next
 
 
+def verdict_window(rc: Any) -> int:
+    """Steps W between a robot's last report and the world's verdict on it (module docstring).
+
+    1 in lockstep; in real time ``step_timeout`` in wall steps (``dt / realtime_factor``),
+    rounded up, plus 1.
+    """
+    if rc.param("world", "mode") != "realtime":
+        return 1
+    wall_dt = rc.scenario.dt / float(rc.param("world", "realtime_factor"))
+    return int(np.ceil(float(rc.param("world", "step_timeout")) / wall_dt - 1e-9)) + 1
+
+
+def reporting(alive: np.ndarray, window: int = 1) -> np.ndarray:
+    """Whose step-k outputs are expected, bool (K, R), from alive flags (K + 1, R).
+
+    Alive at k and at every step up to k + ``window`` (the last step K stands for the steps
+    after it); with ``window`` 1, :func:`reporters` of each step and the next.
+    """
+    alive = np.asarray(alive, dtype=bool)
+    padded = np.concatenate([alive, np.repeat(alive[-1:], window, axis=0)])
+    runs = np.lib.stride_tricks.sliding_window_view(padded, window + 1, axis=0)
+    return runs.all(axis=-1)[:alive.shape[0] - 1]
+
+
 def alive_matrix(team: Mapping[int, np.ndarray], robots: int, steps: int) -> np.ndarray:
     """Alive flags (steps + 1, robots) from the team states ``team`` (step -> flags (R,)).
 
@@ -236,7 +267,7 @@ def alive_matrix(team: Mapping[int, np.ndarray], robots: int, steps: int) -> np.
 
 
 def check(recorded: Mapping[str, Iterable[int]], team: Mapping[int, np.ndarray], robots: int,
-          topics: Iterable[str]) -> Completeness:
+          topics: Iterable[str], window: int = 1) -> Completeness:
     """Completeness of a log (see the module docstring).
 
     Parameters
@@ -249,9 +280,12 @@ def check(recorded: Mapping[str, Iterable[int]], team: Mapping[int, np.ndarray],
         Team size R.
     topics : iterable of str
         The step topics to check (:func:`step_topics`, or those the recorder subscribed).
+    window : int
+        The world's verdict window W in steps (:func:`verdict_window`; 1 in lockstep).
     """
     k_last = max(team, default=0)
     alive = alive_matrix(team, robots, k_last)
+    report = reporting(alive, window)
     everything = np.arange(k_last + 1)
     out: dict[str, TopicCompleteness] = {}
     topics = list(topics)
@@ -272,7 +306,7 @@ def check(recorded: Mapping[str, Iterable[int]], team: Mapping[int, np.ndarray],
             if kind in ROBOT_INPUTS:
                 want = np.flatnonzero(alive[:-1, r])
             else:
-                want = np.flatnonzero(reporters(alive[:-1, r], alive[1:, r]))
+                want = np.flatnonzero(report[:, r])
         have = np.fromiter(set(recorded.get(name, ())), dtype=np.int64)
         missing = np.setdiff1d(want, have, assume_unique=True)
         out[name] = TopicCompleteness(int(want.size), int(want.size - missing.size),

@@ -264,6 +264,7 @@ class Recorder(Node):
         #: team-state step -> alive flags.
         self._dt_ns = 0.0
         self._robots = 0
+        self._window = 1
         self._step_topics: frozenset[str] = frozenset()
         #: A robot's topics by relative name: its system's with a config, else the common.
         self._robot_table: dict[str, tuple[str, ...]] = dict(T.ROBOT_TOPICS)
@@ -317,6 +318,7 @@ class Recorder(Node):
                                                 "robots": str(s.robots)})
         self._dt_ns = s.dt * 1e9
         self._robots = s.robots
+        self._window = completeness.verdict_window(rc)
         step_topics = completeness.run_step_topics(rc)
         self._step_topics = frozenset(step_topics)
         self._gaps = GapCounter(step_topics, s.robots)
@@ -454,7 +456,7 @@ class Recorder(Node):
         topics = [t for t in self._subs if t in self._step_topics]
         if self._truth_spec is not None and self._truth_spec.name not in self._subs:
             topics.append(self._truth_spec.name)  # never subscribed: all of it is missing
-        return completeness.check(self._steps, self._team, self._robots, topics)
+        return completeness.check(self._steps, self._team, self._robots, topics, self._window)
 
     def health(self) -> RecorderHealth | None:
         """What the recorder reports on ``/diagnostics``; None once the log is closed."""

@@ -40,7 +40,9 @@ that an earlier sample (the step's ``STEP_DONE``) is missing, so it is re-sent a
 Membership comes from the world's team state (``/world/robots``: ids, positions, alive
 flags), which the robot reads every step: step k starts when both the measurement set and
 the team state of step k are in, and the protocol learns from it who died and who came back
-(:meth:`Participant.observe_team`). A robot the world counted dead (it was silent for the
+(:meth:`Participant.observe_team`); in real time a peer this robot declared dead on silence
+is admitted again only at the team's epochs, every ``revive_every`` steps
+(:mod:`phd_swarm.nodes.silence`). A robot the world counted dead (it was silent for the
 world's ``step_timeout``, or its process was restarted) sees itself dead in a team state;
 when the world says it is alive again, it rejoins at that step (:meth:`Participant.rejoin`:
 no bins of its own, the step's hand-over gives it its cell's bins). A restarted process
@@ -89,6 +91,7 @@ from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.robot_outputs import RobotOutputs
 from phd_swarm.nodes.ros_params import ParameterError, declare, declare_scenario
+from phd_swarm.nodes.silence import SilenceHold
 from phd_swarm.nodes.wire import wire_for
 from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotStatus, TeamState
 
@@ -157,6 +160,8 @@ class RobotNode(Node):
         #: Counted dead by the world: steps up to ``join_after`` are not this robot's.
         self.evicted = False
         self.join_after = -1
+        #: Real time: peers this robot declared dead on silence stay out until an epoch.
+        self.silence = SilenceHold(self.params["revive_every"])
         faults = LinkFaults(drop=self.params["fault_drop"], delay=self.params["fault_delay"],
                             max_delay_rounds=self.params["fault_delay_rounds"],
                             seed=self.params["fault_seed"])
@@ -331,7 +336,9 @@ class RobotNode(Node):
                     self.get_logger().warning(f"robot {self.robot_id}: rejoined the team at "
                                               f"step {scan.step}")
                 else:
-                    self.agent.observe_team(scan.step, ids, pos, alive)
+                    keep = self.silence.keep_dead(scan.step, ids, alive,
+                                                  self.agent.dead_peers)
+                    self.agent.observe_team(scan.step, ids, pos, alive, keep_dead=keep)
                 self._forget_teams(scan.step)
                 self._sent = 0
                 out = self.agent.start_step(scan.step, scan.sensor, scan.z)

@@ -18,6 +18,7 @@ system declare their outputs, :func:`phd_swarm.nodes.topics.declared_outputs`).
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -252,7 +253,10 @@ def resolve_config(config: str | Path, *, robots: int | None = None,
     """The config ``config`` with a run's overrides applied (ValueError on bad values).
 
     ``targets`` spreads a clustered population over its clusters; ``robot``: robot node
-    parameters (the fault options); ``realtime``: the world's ``mode``.
+    parameters (the fault options); ``realtime``: the world's ``mode``. In real time (by
+    ``realtime`` or the config's own ``mode``) the robots' ``revive_every`` is the world's
+    ``step_timeout`` in steps, unless the config or ``robot`` sets it
+    (:mod:`phd_swarm.nodes.silence`).
     """
     rc = load_run_config(config)
     s = rc.scenario
@@ -281,7 +285,13 @@ def resolve_config(config: str | Path, *, robots: int | None = None,
     if refusal:
         raise ValueError(f"{config}: scenario.system: {refusal}")
     world = {"mode": "realtime"} if realtime else {}
-    return rc.with_overrides(scenario, robot=dict(robot or {}), world=world)
+    robot = dict(robot or {})
+    if (realtime or rc.param("world", "mode") == "realtime") and "revive_every" not in robot \
+            and "revive_every" not in rc.nodes.get("robot", {}):
+        wall_dt = scenario.dt / float(rc.param("world", "realtime_factor"))
+        robot["revive_every"] = max(1, math.ceil(float(rc.param("world", "step_timeout"))
+                                                 / wall_dt))
+    return rc.with_overrides(scenario, robot=robot, world=world)
 
 
 def run_name(rc: RunConfig) -> str:

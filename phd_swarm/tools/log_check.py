@@ -70,7 +70,7 @@ def check_log(path: str | Path, config: RunConfig | None = None
                     steps[rec.topic].add(completeness.step_of(rec.publish_time_ns, s.dt))
             else:
                 steps[rec.topic].add(completeness.step_of(rec.publish_time_ns, s.dt))
-    return completeness.check(steps, team, s.robots, wanted)
+    return completeness.check(steps, team, s.robots, wanted, completeness.verdict_window(rc))
 
 
 def main(argv: list[str] | None = None) -> int:

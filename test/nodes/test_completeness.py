@@ -103,3 +103,29 @@ def test_a_robot_writes_the_outputs_its_parts_provide():
     assert monitor_density(dames) and not monitor_density(sung)
     topics = step_topics(1, robot_outputs(sung), monitor_density=False)
     assert T.robot_topic(0, "tracks") in topics and T.robot_topic(0, "cell") not in topics
+
+
+def test_in_real_time_the_steps_before_the_worlds_verdict_are_not_expected():
+    from phd_swarm.nodes.completeness import reporters, reporting, verdict_window
+    from phd_swarm.tools.launch_plan import resolve_config
+
+    robots, steps = 2, 12
+    # Robot 1's link went down after step 3; the world counted it dead at step 7 (its
+    # step timeout 3 wall steps later) and let it back at step 9.
+    alive = {k: np.array([True, not 7 <= k < 9]) for k in range(steps + 1)}
+    rec = _full(robots, steps, alive)
+    for kind in ("status", "density", "cell", "goal", "estimates"):
+        rec[T.robot_topic(1, kind)] -= {4, 5}
+    lockstep = check(rec, alive, robots, step_topics(robots))
+    assert lockstep.gaps()[T.robot_topic(1, "density")] == (4, 5)
+    realtime = check(rec, alive, robots, step_topics(robots), window=4)
+    assert realtime.complete, realtime.describe()
+    # But a step of robot 1 lost well before its verdict is still missing.
+    rec[T.robot_topic(1, "density")].discard(1)
+    assert check(rec, alive, robots, step_topics(robots), window=4).gaps() == {
+        T.robot_topic(1, "density"): (1,)}
+    flags = np.random.default_rng(0).random((20, 3)) > 0.2
+    np.testing.assert_array_equal(reporting(flags, 1), reporters(flags[:-1], flags[1:]))
+    assert verdict_window(resolve_config("config/dames_static.yaml")) == 1
+    # 15 s of step timeout at 0.5 s steps: 30 steps, plus the step of the report.
+    assert verdict_window(resolve_config("config/dames_static.yaml", realtime=True)) == 31

@@ -256,3 +256,14 @@ def test_single_nodes_keep_dds_on_loopback_unless_the_caller_chose():
                                "ROS_DOMAIN_ID": "42", "PYTHONUNBUFFERED": "1"}
     mine = LP.node_env({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET", "ROS_DOMAIN_ID": "3"})
     assert mine["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SUBNET" and mine["ROS_DOMAIN_ID"] == "3"
+
+
+def test_real_time_robots_hold_their_own_verdicts_for_the_worlds_step_timeout():
+    from phd_swarm.tools.launch_plan import resolve_config
+
+    config = ROOT / "config" / "dames_static.yaml"
+    assert resolve_config(config).param("robot", "revive_every") == 1
+    # 15 s of step timeout at 0.5 s steps: the team's epochs are 30 steps apart.
+    assert resolve_config(config, realtime=True).param("robot", "revive_every") == 30
+    kept = resolve_config(config, realtime=True, robot={"revive_every": 4})
+    assert kept.param("robot", "revive_every") == 4

@@ -58,8 +58,18 @@ class Exchange(ABC):
 
     @abstractmethod
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
-        """The world's membership at the start of ``step`` (who died, who came back)."""
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
+        """The world's membership at the start of ``step`` (who died, who came back).
+
+        ``keep_dead``: robots this one holds for dead although the world says they are
+        alive (a real-time robot's verdict on silence, until the world's own; see
+        :class:`phd_swarm.nodes.robot.RobotNode`): they are not admitted again.
+        """
+
+    @property
+    def dead_peers(self) -> frozenset[int]:
+        """The robots this one holds for dead (none for an exchange without a dead set)."""
+        return frozenset()
 
     @abstractmethod
     def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,

@@ -76,10 +76,16 @@ class ContactExchange(Exchange):
         """Nothing to set up: the radio reads the team state of every step."""
 
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
-        """The world's team state of ``step``: who is alive, and where (for the radio)."""
-        self._team = (np.asarray(ids), np.asarray(positions, dtype=float),
-                      np.asarray(alive, dtype=bool))
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
+        """The world's team state of ``step``: who is alive, and where (for the radio).
+
+        The robots of ``keep_dead`` are out of reach as if dead.
+        """
+        ids = np.asarray(ids)
+        alive = np.asarray(alive, dtype=bool)
+        if keep_dead:
+            alive = alive & ~np.isin(ids, np.fromiter(keep_dead, dtype=np.int64))
+        self._team = (ids, np.asarray(positions, dtype=float), alive)
 
     def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,
                alive: np.ndarray) -> None:

@@ -28,7 +28,7 @@ class NoExchange(Exchange):
         """Nothing to set up."""
 
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
         """Nothing to learn from the team."""
 
     def rejoin(self, step: int, ids: np.ndarray, positions: np.ndarray,

@@ -156,7 +156,7 @@ class Membership:
         return self.take_configuration(live, positions[alive], None)
 
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
         """Take the world's membership at the start of step ``step``.
 
         See :meth:`phd_swarm.core.exchange.voronoi_phd.participant.Participant.observe_team`.
@@ -171,7 +171,7 @@ class Membership:
             _log.warning("robot %d: the world says %s are dead at step %d; declared dead",
                          self.robot_id, sorted(gone), step)
             self.declare_dead(gone)
-        back = self.dead & set(ids[alive].tolist())
+        back = (self.dead & set(ids[alive].tolist())) - keep_dead
         if not back or self.robot_id not in ids[alive]:
             return
         self.dead -= back

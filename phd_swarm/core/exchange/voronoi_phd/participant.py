@@ -200,7 +200,7 @@ class Participant(Exchange):
                   step, list(self.contacts))
 
     def observe_team(self, step: int, ids: np.ndarray, positions: np.ndarray,
-                     alive: np.ndarray) -> None:
+                     alive: np.ndarray, keep_dead: frozenset[int] = frozenset()) -> None:
         """Take the world's membership at the start of step ``step``.
 
         Robots the world says are dead are declared dead at once (``stats['world_dead']``;
@@ -210,7 +210,9 @@ class Participant(Exchange):
         configuration of the live robots at ``step`` makes them contacts of this robot
         (:meth:`initialise`'s rule, symmetric: the other robot decides on the same numbers).
         Call it before :meth:`start_step` of ``step``; with everybody alive and nobody
-        declared dead it does nothing.
+        declared dead it does nothing. The robots of ``keep_dead`` stay dead although the
+        world says they are alive (the configuration that decides contacts still counts
+        them, so that both sides of every other pair decide on the same numbers).
 
         Parameters
         ----------
@@ -222,8 +224,15 @@ class Participant(Exchange):
             Their positions at ``step`` [m].
         alive : np.ndarray of bool, shape (R,)
             Which robots the world says are alive.
+        keep_dead : frozenset of int
+            Robots declared dead here that are not admitted again at this step.
         """
-        self._members.observe_team(step, ids, positions, alive)
+        self._members.observe_team(step, ids, positions, alive, keep_dead)
+
+    @property
+    def dead_peers(self) -> frozenset[int]:
+        """The robots declared dead (by the world or by a timeout here)."""
+        return frozenset(self._members.dead)
 
     # --------------------------------------------------------------- interface
     @property

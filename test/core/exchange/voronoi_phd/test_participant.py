@@ -274,3 +274,14 @@ def test_a_rejoining_robot_and_the_others_agree_on_who_is_a_contact():
     for rid in range(4):
         assert (4 in robots[rid].contacts) == (rid in robots[4].contacts)
         assert robots[rid].dead == set() and robots[rid].stats["revived_peers"] == 1
+
+
+def test_observe_team_keeps_dead_the_robots_it_is_told_to_and_admits_the_rest():
+    robot = _robot(0)
+    robot.observe_team(1, [0, 1, 2], POS, np.array([True, False, False]))
+    assert robot.dead == {1, 2} and robot.dead_peers == frozenset({1, 2})
+    robot.observe_team(2, [0, 1, 2], POS, np.ones(3, dtype=bool), keep_dead=frozenset({2}))
+    assert robot.dead == {2} and 2 not in robot.contacts and 1 in robot.contacts
+    assert robot.stats["revived_peers"] == 1
+    robot.observe_team(3, [0, 1, 2], POS, np.ones(3, dtype=bool))
+    assert robot.dead == set() and 2 in robot.contacts
