@@ -18,11 +18,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-from phd_swarm.logs.mcap_log import read_messages, summarize
+from phd_swarm.logs.mcap_log import read_messages, read_metadata, summarize
 from phd_swarm.nodes.completeness import verdict_window
+from phd_swarm.tools.hosts import load_layout
 from phd_swarm.tools.launch_plan import resolve_config
 from phd_swarm.tools.netns import HostNetwork
 from phd_swarm.tools.run_swarm import WALL_CLOCK_FIELDS
+
+from .test_scripts import _config as _two_robots
 
 ROOT = Path(__file__).resolve().parents[2]
 RUN_SWARM = str(ROOT / "scripts" / "run_swarm.sh")
@@ -103,6 +106,39 @@ def test_a_team_over_three_hosts_equals_the_one_host_run_bit_for_bit(tmp_path, c
     team = [r.data for r in read_messages(run / "run.mcap", ["/monitor/density"], decode=False)]
     same = [r.data for r in read_messages(ref / "run.mcap", ["/monitor/density"], decode=False)]
     assert len(team) == 16 and team == same
+
+
+def test_robots_started_by_hand_on_their_hosts_join_a_world_on_another(tmp_path, children):
+    """docs/deployment.md's recipe: each host's profile, then run_robot.sh there."""
+    config = _two_robots(tmp_path)
+    with HostNetwork(HOSTS) as net:
+        layout = load_layout(_layout(net, tmp_path / "hosts.yaml"))
+
+        def on(host: str, argv: list[str]):
+            profile = tmp_path / f"{host}.xml"
+            profile.write_text(layout.profile(host))
+            env = {"FASTRTPS_DEFAULT_PROFILES_FILE": str(profile),
+                   "ROS_AUTOMATIC_DISCOVERY_RANGE": "SYSTEM_DEFAULT"}
+            return children.start(net[host].command(argv), env=env)
+
+        log = tmp_path / "hand.mcap"
+        recorder = on("base", [str(ROOT / "scripts" / "record.sh"), str(log), str(config)])
+        robots = [on(host, [str(ROOT / "scripts" / "run_robot.sh"), str(i), str(config)])
+                  for i, host in enumerate(("field1", "field2"))]
+        world = on("base", [str(ROOT / "scripts" / "run_world.sh"), str(config)])
+        try:
+            out, err = world.communicate(timeout=180.0)
+        except subprocess.TimeoutExpired:
+            children.stop(world)
+            raise
+        time.sleep(0.5)
+        for proc in (recorder, *robots):
+            children.stop(proc)
+    assert world.returncode == 0, out + err
+    assert "done, 8 steps" in out + err and "dead robots: none" in out + err, out + err
+    assert summarize(log).topics["/world/truth"].message_count == 8
+    report = json.loads(read_metadata(log)["phd_swarm.completeness"]["report"])
+    assert report["complete"] and report["steps"] == 8, report
 
 
 def _wait_for(predicate, what: str, proc, timeout: float = 240.0) -> None:
