@@ -39,6 +39,7 @@ setup(
         "team = phd_swarm.nodes.team:main",
         "monitor = phd_swarm.nodes.monitor:main",
         "recorder = phd_swarm.nodes.recorder:main",
+        "viewer = phd_swarm.nodes.viewer:main",
         # tools: ros2 run phd_swarm run_swarm CONFIG --robots 4 ...
         "run_swarm = phd_swarm.tools.run_swarm:main",
         "check_config = phd_swarm.tools.check_config:main",
@@ -46,5 +47,6 @@ setup(
         "replay = phd_swarm.tools.replay:main",
         "sweep = phd_swarm.tools.sweep:main",
         "log_check = phd_swarm.tools.log_check:main",
+        "view_server = phd_swarm.tools.view_server:main",
     ]},
 )

@@ -16,6 +16,9 @@
 #   install uses; checks that colcon, cmake and the Python modules are there (apt and
 #   docs/install.md), then step 2 with the sourced ROS as the underlay.
 #
+# `scripts/setup.sh --with-view` also sets up the live view (docs/view.md): the pinned
+# requirements-view.lock (rerun-sdk) into the venv, and Debian's chromium for its tests and
+# screenshots (apt-get, as root; otherwise it says what to install).
 # `scripts/setup.sh --build-hash` prints the hash of the build inputs and exits.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -50,6 +53,14 @@ build_inputs_hash() {
 if [ "${1:-}" = "--build-hash" ]; then
   build_inputs_hash
   exit 0
+fi
+
+WITH_VIEW=0
+if [ "${1:-}" = "--with-view" ]; then
+  WITH_VIEW=1
+elif [ $# -gt 0 ]; then
+  echo "usage: $0 [--with-view | --build-hash]" >&2
+  exit 2
 fi
 
 log() { printf '[setup] %s\n' "$*"; }
@@ -128,5 +139,36 @@ if [ "$(cat install/.phd_swarm_build.sha256 2>/dev/null)" != "$build_sum" ]; the
     --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$PY" \
     --event-handlers console_cohesion- summary+ status-
   echo "$build_sum" > install/.phd_swarm_build.sha256
+fi
+if [ "$WITH_VIEW" -eq 1 ]; then
+  VIEW_LOCK="$ROOT/requirements-view.lock"
+  if [ "$KIND" = native ]; then
+    if ! python3 -c 'import rerun' 2>/dev/null; then
+      echo "setup.sh --with-view: on a native install, pip install --user -r" \
+           "$VIEW_LOCK (rerun-sdk); see docs/view.md" >&2
+      exit 1
+    fi
+  else
+    view_sum="$(sha256sum "$VIEW_LOCK" | cut -d' ' -f1)"
+    if [ "$(cat "$VENV/.phd_swarm_view.sha256" 2>/dev/null)" != "$view_sum" ]; then
+      log "installing the live view (requirements-view.lock: rerun-sdk)"
+      "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$VIEW_LOCK"
+      # Rerun's usage analytics off for this user (the view server also runs with its own
+      # configuration, analytics off): nothing leaves the machine.
+      "$VENV/bin/rerun" analytics disable >/dev/null 2>&1 || true
+      echo "$view_sum" > "$VENV/.phd_swarm_view.sha256"
+    fi
+  fi
+  if ! command -v chromium >/dev/null 2>&1 && [ -z "${CHROMIUM:-}" ]; then
+    if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null 2>&1; then
+      log "installing chromium (Debian) for the view's tests and screenshots"
+      DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null \
+        || { apt-get update -q >/dev/null && \
+             DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null; }
+    else
+      echo "setup.sh --with-view: no chromium on PATH; the view works in any browser, but" \
+           "its tests need one (Debian: sudo apt-get install chromium; or set CHROMIUM)" >&2
+    fi
+  fi
 fi
 log "ready (source scripts/env.sh to use it)"

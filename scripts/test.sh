@@ -6,8 +6,9 @@
 # core with pytest-xdist (PHD_SWARM_TEST_WORKERS workers, default: one per core). It fails
 # if either fails.
 # `scripts/test.sh --full` (what CI runs) then also runs the tests marked `full`: 50 robot
-# processes through run_swarm.sh, and the benchmarks' quick runs that start ROS runs
-# (about 5 minutes).
+# processes through run_swarm.sh, the benchmarks' quick runs that start ROS runs and the
+# live view in headless Chromium (about 7 minutes; it sets up the view first,
+# scripts/setup.sh --with-view).
 # With other arguments, one pytest run with them, e.g. `scripts/test.sh test/core -k ospa`.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -32,6 +33,10 @@ if [ "${1:-}" = "--full" ] && [ $# -eq 1 ]; then
 elif [ $# -gt 0 ]; then
   run_pytest "$@"
   exit $?
+fi
+if [ "$full" -eq 1 ]; then
+  # The live view's tests (marker full) need rerun-sdk and chromium.
+  "$ROOT/scripts/setup.sh" --with-view
 fi
 rc=0
 # The real ros2 CLI, launch and launch_ros for the ROS tests (a no-op when done, or on a

@@ -101,5 +101,22 @@ RECORDER = (
               "hold it."),
 )
 
+VIEWER = (
+    ParamSpec("rerun_url", "", "The Rerun gRPC proxy the view is sent to "
+              "(rerun+http://127.0.0.1:PORT/proxy, from scripts/run_swarm.sh --view or "
+              "python -m phd_swarm.tools.view_server); '' sends it nowhere."),
+    ParamSpec("save_path", "", "Also write the view to this .rrd file ('' for none); "
+              "rerun FILE opens it."),
+    ParamSpec("recording_name", "phd_swarm", "The recording's name in the viewer."),
+    ParamSpec("discover_period", 0.5, "Wall seconds between two looks at the graph for new "
+              "topics to draw [s].", low=0.05, high=60.0),
+    ParamSpec("trail_steps", 40, "Positions kept in each robot's trail.", low=2,
+              high=100_000),
+    ParamSpec("observe_world", False, "Be one of the world's observers: read /world/truth "
+              "once /world/robots and /world/markers have matched their writer here, so a "
+              "lockstep world whose observers parameter counts the viewer starts step 0 "
+              "only when the view can draw every step (run_swarm.sh --view sets both)."),
+)
+
 #: Node key in a config file -> its parameters.
 NODES = {"world": WORLD, "robot": ROBOT, "monitor": MONITOR, "recorder": RECORDER}

@@ -13,7 +13,9 @@ Conventions, shared by every marker built here:
   those of step k in the viewer (no DELETEALL, hence no flicker); ``lifetime`` is 0 (kept
   until replaced).
 - Everything lies in the z = 0 plane of ``frame_id`` (the world frame, REP 105); scales are
-  in metres and chosen for the papers' 100 x 100 m maps.
+  in metres, chosen for the papers' 100 x 100 m maps and multiplied by ``size``, which the
+  world and the monitor set to :func:`marker_size` of the scenario's map (Shirsat &
+  Berman's 5 x 5 m arena draws its robots 0.05 m wide, not 1 m).
 - Many things of one kind go into one ``*_LIST`` marker rather than one marker each: a
   MarkerArray of 100 robots then holds a handful of markers, which keeps building,
   serialising and rendering cheap.
@@ -73,6 +75,14 @@ GOAL_LINE_WIDTH = 0.05
 ESTIMATE_DIAMETER = 1.5      # larger than a target's cube, so a hit shows the cube inside
 GRID_NODE_SIZE = 0.08
 MEETING_DIAMETER = 1.2       # around the robots' spheres at a renewal epoch
+
+
+def marker_size(env: object) -> float:
+    """The size factor of a map's markers: its larger side over 100 m.
+
+    1 for the papers' 100 x 100 m maps; ``env`` has ``xmin``, ``xmax``, ``ymin``, ``ymax``.
+    """
+    return max(env.xmax - env.xmin, env.ymax - env.ymin) / 100.0
 
 
 def _rgba(name: str) -> ColorRGBA:
@@ -158,7 +168,7 @@ def _marker_array(markers: list[dict[str, object]]) -> bytes:
 
 def world_markers_cdr(stamp: Time, frame_id: str, positions: np.ndarray, alive: np.ndarray,
                       fov_radius: float, targets: np.ndarray,
-                      ids: np.ndarray | None = None) -> bytes:
+                      ids: np.ndarray | None = None, *, size: float = 1.0) -> bytes:
     """The world's view of a step: robots, their ids and fields of view, true targets.
 
     Namespaces and markers (ids fixed, so each call replaces the previous one):
@@ -213,23 +223,24 @@ def world_markers_cdr(stamp: Time, frame_id: str, positions: np.ndarray, alive: 
         raise ValueError(f"fov_radius must be a finite number >= 0, got {fov_radius!r}")
     ok = _finite(pos)
 
-    robots = _marker_fields(stamp, frame_id, "robots", 0, Marker.SPHERE_LIST, ROBOT_DIAMETER,
-                            "robot_alive", pos[ok])
+    robots = _marker_fields(stamp, frame_id, "robots", 0, Marker.SPHERE_LIST,
+                            size * ROBOT_DIAMETER, "robot_alive", pos[ok])
     colour = (_rgba_fields("robot_dead"), _rgba_fields("robot_alive"))
     robots["colors"] = [colour[a] for a in live[ok].tolist()]
 
     label = _marker_fields(stamp, frame_id, "robot_ids", 0, Marker.TEXT_VIEW_FACING,
-                           ROBOT_ID_HEIGHT, "robot_id")
+                           size * ROBOT_ID_HEIGHT, "robot_id")
     labels = []
     for r, (x, y), good in zip(rid.tolist(), pos.tolist(), ok.tolist(), strict=True):
         if good:
-            labels.append({**label, "id": r, "pose": {"position": (x, y + ROBOT_ID_OFFSET,
+            labels.append({**label, "id": r, "pose": {"position": (x, y + size * ROBOT_ID_OFFSET,
                                                                    0.0)},
                            "text": str(r)})
         else:
             labels.append({**label, "id": r, "action": Marker.DELETE})
 
-    fov = _marker_fields(stamp, frame_id, "fov", 0, Marker.LINE_LIST, FOV_LINE_WIDTH, "fov")
+    fov = _marker_fields(stamp, frame_id, "fov", 0, Marker.LINE_LIST, size * FOV_LINE_WIDTH,
+                         "fov")
     centres = pos[ok & live]
     if len(centres) and fov_radius > 0.0:
         angle = np.linspace(0.0, 2.0 * np.pi, FOV_SEGMENTS, endpoint=False)
@@ -239,23 +250,24 @@ def world_markers_cdr(stamp: Time, frame_id: str, positions: np.ndarray, alive: 
         fov["points"] = _segment_xy(vertices, starts, starts + FOV_SEGMENTS)
 
     tgt = _xy(targets)
-    cubes = _marker_fields(stamp, frame_id, "targets", 0, Marker.CUBE_LIST, TARGET_SIZE,
-                           "target", tgt[_finite(tgt)])
+    cubes = _marker_fields(stamp, frame_id, "targets", 0, Marker.CUBE_LIST,
+                           size * TARGET_SIZE, "target", tgt[_finite(tgt)])
     return _marker_array([robots, *labels, fov, cubes])
 
 
 def world_markers(stamp: Time, frame_id: str, positions: np.ndarray, alive: np.ndarray,
                   fov_radius: float, targets: np.ndarray,
-                  ids: np.ndarray | None = None) -> MarkerArray:
+                  ids: np.ndarray | None = None, *, size: float = 1.0) -> MarkerArray:
     """:func:`world_markers_cdr` as a message (same arguments and errors)."""
     return deserialize_message(world_markers_cdr(stamp, frame_id, positions, alive,
-                                                 fov_radius, targets, ids), MarkerArray)
+                                                 fov_radius, targets, ids, size=size),
+                               MarkerArray)
 
 
 def team_markers_cdr(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
                      positions: Mapping[int, np.ndarray], goals: Mapping[int, np.ndarray],
                      estimates: np.ndarray, *, grid_nodes: np.ndarray | None = None,
-                     meeting_ids: Sequence[int] | None = None) -> bytes:
+                     meeting_ids: Sequence[int] | None = None, size: float = 1.0) -> bytes:
     """The team's view of a step: cells, goals and the extracted target estimates.
 
     Namespaces and markers (ids fixed, so each call replaces the previous one):
@@ -303,8 +315,8 @@ def team_markers_cdr(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray]
     """
     polygons = [v for v in (_xy(cells[k]) for k in sorted(cells))
                 if len(v) >= 3 and _finite(v).all()]
-    edges = _marker_fields(stamp, frame_id, "cells", 0, Marker.LINE_LIST, CELL_LINE_WIDTH,
-                           "cell")
+    edges = _marker_fields(stamp, frame_id, "cells", 0, Marker.LINE_LIST,
+                           size * CELL_LINE_WIDTH, "cell")
     if polygons:
         sizes = np.array([len(v) for v in polygons])
         ends = np.cumsum(sizes)
@@ -312,37 +324,39 @@ def team_markers_cdr(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray]
 
     goal_ids = sorted(goals)
     goal_xy = _xy([goals[k] for k in goal_ids])
-    spheres = _marker_fields(stamp, frame_id, "goals", 0, Marker.SPHERE_LIST, GOAL_DIAMETER,
-                             "goal", goal_xy[_finite(goal_xy)])
+    spheres = _marker_fields(stamp, frame_id, "goals", 0, Marker.SPHERE_LIST,
+                             size * GOAL_DIAMETER, "goal", goal_xy[_finite(goal_xy)])
 
     linked = [k for k in goal_ids if k in positions]
     pairs = np.stack([_xy([positions[k] for k in linked]), _xy([goals[k] for k in linked])],
                      axis=1)
     pairs = pairs[np.isfinite(pairs).all(axis=(1, 2))]
-    lines = _marker_fields(stamp, frame_id, "goals", 1, Marker.LINE_LIST, GOAL_LINE_WIDTH,
-                           "goal_line", pairs.reshape(-1, 2))
+    lines = _marker_fields(stamp, frame_id, "goals", 1, Marker.LINE_LIST,
+                           size * GOAL_LINE_WIDTH, "goal_line", pairs.reshape(-1, 2))
 
     est = _xy(estimates)
     found = _marker_fields(stamp, frame_id, "estimates", 0, Marker.SPHERE_LIST,
-                           ESTIMATE_DIAMETER, "estimate", est[_finite(est)])
+                           size * ESTIMATE_DIAMETER, "estimate", est[_finite(est)])
 
     extra = []
     if grid_nodes is not None:
         nodes = _xy(grid_nodes)
         extra.append(_marker_fields(stamp, frame_id, "grid", 0, Marker.POINTS,
-                                    GRID_NODE_SIZE, "grid_node", nodes[_finite(nodes)]))
+                                    size * GRID_NODE_SIZE, "grid_node",
+                                    nodes[_finite(nodes)]))
     if meeting_ids is not None:
         at = _xy([positions[k] for k in sorted(set(meeting_ids)) if k in positions])
         extra.append(_marker_fields(stamp, frame_id, "meetings", 0, Marker.SPHERE_LIST,
-                                    MEETING_DIAMETER, "meeting", at[_finite(at)]))
+                                    size * MEETING_DIAMETER, "meeting", at[_finite(at)]))
     return _marker_array([edges, spheres, lines, found, *extra])
 
 
 def team_markers(stamp: Time, frame_id: str, cells: Mapping[int, np.ndarray],
                  positions: Mapping[int, np.ndarray], goals: Mapping[int, np.ndarray],
                  estimates: np.ndarray, *, grid_nodes: np.ndarray | None = None,
-                 meeting_ids: Sequence[int] | None = None) -> MarkerArray:
+                 meeting_ids: Sequence[int] | None = None, size: float = 1.0) -> MarkerArray:
     """:func:`team_markers_cdr` as a message (same arguments)."""
     return deserialize_message(team_markers_cdr(stamp, frame_id, cells, positions, goals,
                                                 estimates, grid_nodes=grid_nodes,
-                                                meeting_ids=meeting_ids), MarkerArray)
+                                                meeting_ids=meeting_ids, size=size),
+                               MarkerArray)

@@ -48,7 +48,7 @@ from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
 from phd_swarm.nodes import completeness, convert, occupancy
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.markers import team_markers_cdr
+from phd_swarm.nodes.markers import marker_size, team_markers_cdr
 from phd_swarm.nodes.observe import TeamReader, add_windows, union
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.ros_params import declare, declare_scenario
@@ -303,7 +303,7 @@ class MonitorNode(Node):
                    if self.meetings else None)
             self.markers_pub.publish(team_markers_cdr(
                 stamp, self.frame_id, self.cells, self.positions, self.goals, estimates,
-                grid_nodes=grid, meeting_ids=met))
+                grid_nodes=grid, meeting_ids=met, size=marker_size(self.scenario.env)))
         every = self.params["progress_every"]
         if every and (k % every == 0 or k == self.scenario.steps - 1):
             self._log_progress(row)

@@ -55,7 +55,7 @@ from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.diagnostics import WorldHealth, world_status
-from phd_swarm.nodes.markers import world_markers_cdr
+from phd_swarm.nodes.markers import marker_size, world_markers_cdr
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import declare, declare_scenario
@@ -184,7 +184,8 @@ class WorldNode(Node):
         if self.params["publish_markers"]:
             self.markers_pub.publish(world_markers_cdr(
                 convert.stamp(k, self.dt), self.frame_id, positions, w.alive,
-                self.scenario.models.detection.radius, truth))
+                self.scenario.models.detection.radius, truth,
+                size=marker_size(self.scenario.env)))
         self._phase = "stepping"
         self._phase_since = time.monotonic()
 

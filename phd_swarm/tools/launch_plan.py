@@ -42,6 +42,7 @@ NODE_EXECUTABLES = {
     "team": "phd_swarm.nodes.team",
     "monitor": "phd_swarm.nodes.monitor",
     "recorder": "phd_swarm.nodes.recorder",
+    "viewer": "phd_swarm.nodes.viewer",
 }
 
 #: The package's tools as console scripts: executable -> module whose ``main()`` it runs.
@@ -52,6 +53,7 @@ TOOL_EXECUTABLES = {
     "replay": "phd_swarm.tools.replay",
     "sweep": "phd_swarm.tools.sweep",
     "log_check": "phd_swarm.tools.log_check",
+    "view_server": "phd_swarm.tools.view_server",
 }
 
 #: With ``--discovery-server auto`` (the default), start phd_swarm's discovery server above
@@ -342,6 +344,8 @@ class SwarmOptions:
     robot_nice: int = 0
     #: Where the processes run (``--hosts``): None for this machine, on loopback.
     hosts: HostLayout | None = None
+    #: A live view's viewer node is one more observer of the world (``--view``).
+    view: bool = False
 
 
 @dataclass(frozen=True)
@@ -400,10 +404,11 @@ def swarm_plan(rc: RunConfig, run_dir: Path, options: SwarmOptions | None = None
     """The processes of a run of ``rc`` into ``run_dir`` (``run_swarm.sh`` and swarm.launch.py).
 
     The world and the robots wait for ``observers`` (the monitor, and the recorder when
-    recording); their ``ready_timeout`` grows with the number of processes
-    (:func:`ready_timeouts`); the monitor writes ``summary.json`` and exits when done; the
-    recorder writes ``run.mcap`` for the config's team (``discover`` off). Above 30
-    processes DDS uses the repository's profile and a discovery server (``options``).
+    recording; the world also for the viewer with ``options.view``); their
+    ``ready_timeout`` grows with the number of processes (:func:`ready_timeouts`); the
+    monitor writes ``summary.json`` and exits when done; the recorder writes ``run.mcap``
+    for the config's team (``discover`` off). Above 30 processes DDS uses the
+    repository's profile and a discovery server (``options``).
     ``base_env``: the caller's environment (default ``os.environ``).
     """
     options = SwarmOptions() if options is None else options
@@ -415,7 +420,7 @@ def swarm_plan(rc: RunConfig, run_dir: Path, options: SwarmOptions | None = None
     ready = ready_timeouts(rc, processes)
     params = run_dir / "config.yaml"
     rc = rc.with_overrides(
-        world={"observers": observers, "ready_timeout": ready["world"]},
+        world={"observers": observers + int(options.view), "ready_timeout": ready["world"]},
         robot={"observers": observers, "ready_timeout": ready["robot"]},
         monitor={"summary_path": str(run_dir / "summary.json"), "exit_when_done": True},
         recorder={"output": str(run_dir / "run.mcap"), "params_file": str(params),

@@ -35,12 +35,15 @@ import argparse
 import contextlib
 import json
 import logging
+import os
 import signal
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from phd_swarm.logs.mcap_log import LogError, LogReader, LogRecord, open_log
@@ -361,6 +364,14 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
                    help="print what would be sent (per topic: type, count, first and last "
                         "log time, QoS) and exit without starting ROS")
     p.add_argument("--quiet", action="store_true", help="no progress and final lines")
+    p.add_argument("--view", action="store_true", help="watch the replay in a browser: "
+                   "serve the live view on 127.0.0.1, print its URL, and replay the topics "
+                   "it draws once it reads them (docs/view.md)")
+    p.add_argument("--view-hold", action="store_true", help="with --view: keep serving the "
+                   "view after the replay until Ctrl-C or SIGTERM (the default only from a "
+                   "terminal)")
+    p.add_argument("--view-save", type=Path, metavar="FILE", help="with --view: also save "
+                   "the view to FILE (.rrd; rerun FILE opens it)")
     opts = p.parse_args(list(argv))
     if not opts.rate > 0:
         p.error(f"--rate must be positive, got {opts.rate:g}")
@@ -489,10 +500,53 @@ def main(argv: Sequence[str] | None = None) -> int:
                     print(f"{PROG}: warning: {index.path}: the log holds no messages",
                           file=sys.stderr)
                     return 0
+                if opts.view:
+                    return _replay_viewed(["replay", *full], opts, log, index)
                 return _replay_live(["replay", *full], opts, log, index, selection)
         except LogError as exc:
             print(f"{PROG}: {exc}", file=sys.stderr)
             return 1
+
+
+def _replay_viewed(argv: list[str], opts: argparse.Namespace, log: LogReader,
+                   index: LogIndex) -> int:
+    """``--view``: start the view server and the viewer, then replay what it draws.
+
+    The topics the view draws (unless ``--topics``), each once the viewer reads it
+    (``--wait-subscribers 1`` at least).
+    """
+    from phd_swarm.nodes.viewer import drawn_topics
+    from phd_swarm.tools import view_run
+    from phd_swarm.tools.view_server import ViewServerError
+
+    if not opts.topics:
+        opts.topics = list(drawn_topics({t: [lt.ros_type] for t, lt in index.topics.items()}))
+    if not opts.topics:
+        print(f"{PROG}: error: {index.path} holds no topic the view draws", file=sys.stderr)
+        return 2
+    selection = select(index, opts.topics, opts.start, opts.end)
+    opts.wait_subscribers = max(1, opts.wait_subscribers)
+    # The view's logs beside the run's, or in a temporary directory if that is read-only.
+    logs = Path(index.path).resolve().parent / "logs"
+    if not os.access(logs if logs.exists() else logs.parent, os.W_OK):
+        logs = Path(tempfile.mkdtemp(prefix="phd_swarm_replay_view_"))
+    try:
+        server = view_run.start_server(logs / "view_server.log", PROG)
+    except ViewServerError as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return 1
+    viewer = None
+    try:
+        viewer = view_run.start_viewer(dict(os.environ), server.grpc_url, opts.view_save,
+                                       logs / "replay_viewer.log",
+                                       f"replay of {Path(index.path).parent.name}")
+        code = _replay_live(argv, opts, log, index, selection)
+        view_run.stop(viewer, None)
+        viewer = None
+        view_run.hold(server, PROG, True if opts.view_hold else None)
+        return code
+    finally:
+        view_run.stop(viewer, server)
 
 
 if __name__ == "__main__":

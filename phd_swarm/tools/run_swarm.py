@@ -43,6 +43,7 @@ from phd_swarm.config import RunConfig
 from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError
 from phd_swarm.nodes.world import EXIT_NOT_READY
+from phd_swarm.tools import view_run
 from phd_swarm.tools.dds import (
     DDS_PROFILE,
     free_udp_port,
@@ -70,6 +71,9 @@ from phd_swarm.tools.processes import (
     Swarm,
     stop_process_group,
 )
+from phd_swarm.tools.view_server import ViewServerError
+
+PROG = "run_swarm"
 
 #: How long the robots' start waits for the observers to be up [s].
 OBSERVERS_UP_TIMEOUT = 60.0
@@ -151,6 +155,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--record-inboxes", action="store_true",
                    help="also record the protocol traffic (/robot_*/inbox) in run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--view", action="store_true", help="watch the run live in a browser: "
+                   "serve the view on 127.0.0.1 and print its URL (docs/view.md; needs "
+                   "scripts/setup.sh --with-view)")
+    p.add_argument("--view-hold", action="store_true", help="with --view: keep serving the "
+                   "view after the run until Ctrl-C or SIGTERM (the default only when started "
+                   "from a terminal)")
     opts = p.parse_args(argv)
     if opts.start_window < 0:
         p.error(f"--start-window: a number of processes >= 0, got {opts.start_window}")
@@ -181,11 +191,14 @@ def run(opts: argparse.Namespace) -> int:
     run_dir = fresh_run_dir(Path(opts.out), opts.name or run_name(rc))
     record = not opts.no_record
     per = max(1, opts.robots_per_process)
+    # With the world's markers the viewer is one of its observers: the view gets step 0.
+    view_observes = bool(opts.view) and bool(rc.param("world", "publish_markers"))
     # The processes, their parameters and environment: the plan swarm.launch.py starts too.
     plan = swarm_plan(rc, run_dir, SwarmOptions(
         robots_per_process=per, record=record, record_inboxes=bool(opts.record_inboxes),
         dds=opts.dds, discovery_server=opts.discovery_server, robot_nice=opts.robot_nice,
-        hosts=None if opts.hosts is None else load_layout(opts.hosts)))
+        hosts=None if opts.hosts is None else load_layout(opts.hosts),
+        view=view_observes))
     rc = plan.rc
     rc.write_params(plan.params)
     for path, text in plan.files.items():
@@ -199,6 +212,13 @@ def run(opts: argparse.Namespace) -> int:
     interrupted = False
     code = 0
     server = None
+    view_server = viewer = None
+    if opts.view:
+        try:
+            view_server = view_run.start_server(run_dir / "logs" / "view_server.log", PROG)
+        except ViewServerError as exc:
+            print(f"{PROG}: {exc}", file=sys.stderr)
+            return 1
     # SIGINT explicitly too: a shell that starts a job in the background (nohup, `cmd &` in
     # a script) makes it ignore SIGINT, and Python then installs no handler for it.
     previous = {sig: signal.signal(sig, _raise_interrupt)
@@ -224,6 +244,11 @@ def run(opts: argparse.Namespace) -> int:
               + (f", hosts {_hosts_line(plan)}" if plan.hosts else ""),
               flush=True)
         print(f"run_swarm: results in {run_dir}/", flush=True)
+        if view_server is not None:
+            viewer = view_run.start_viewer(
+                view_run.env_for_viewer(env), view_server.grpc_url, run_dir / "view.rrd",
+                run_dir / "logs" / "viewer.log", run_dir.name,
+                observe_world=view_observes)
         # The observers first, each up (its subscriptions made) before the robots start:
         # with tens of processes starting at once, a recorder making its ~14 subscriptions
         # per robot got a slice of the CPU and was up 85 s after the robots, which had
@@ -286,7 +311,12 @@ def run(opts: argparse.Namespace) -> int:
             swarm.stop_all()
         if server is not None:
             stop_process_group(server, 5.0)
+        view_run.stop(viewer, None)
     wall = time.monotonic() - started
+    if view_server is not None:
+        if not interrupted:
+            view_run.hold(view_server, PROG, True if opts.view_hold else None)
+        view_server.close()
     _ensure_bag_metadata(run_dir / "run.mcap")
     if code == EXIT_NOT_READY:
         print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",

@@ -193,3 +193,25 @@ def test_sizes_are_metres():
     assert w["robots"][0].scale.x == markers.ROBOT_DIAMETER
     assert w["fov"][0].scale.x == markers.FOV_LINE_WIDTH
     assert w["robot_ids"][0].scale.z == markers.ROBOT_ID_HEIGHT
+
+
+def test_sizes_scale_with_the_map():
+    from phd_swarm.core.geometry.grid import Environment
+
+    assert markers.marker_size(Environment(0.0, 0.0, 100.0, 100.0)) == 1.0
+    small = markers.marker_size(Environment(0.0, 0.0, 5.0, 2.0))
+    assert small == 0.05
+    pos, targets = np.array([[1.0, 1.0]]), np.array([[2.0, 2.0]])
+    one = by_ns(world_markers(STAMP, FRAME, pos, [True], 1.0, targets))
+    scaled = by_ns(world_markers(STAMP, FRAME, pos, [True], 1.0, targets, size=small))
+    for ns in ("robots", "fov", "targets", "robot_ids"):
+        np.testing.assert_allclose([scaled[ns][0].scale.x, scaled[ns][0].scale.z],
+                                   [small * one[ns][0].scale.x, small * one[ns][0].scale.z],
+                                   err_msg=ns)
+        assert max(one[ns][0].scale.x, one[ns][0].scale.z) > 0, ns
+    assert scaled["robot_ids"][0].pose.position.y == pytest.approx(
+        1.0 + small * markers.ROBOT_ID_OFFSET)
+    team = by_ns(team_markers(STAMP, FRAME, {}, {0: pos[0]}, {0: targets[0]}, targets,
+                              meeting_ids=[0], size=small))
+    assert team["goals"][0].scale.x == pytest.approx(small * markers.GOAL_DIAMETER)
+    assert team["meetings"][0].scale.x == pytest.approx(small * markers.MEETING_DIAMETER)

@@ -61,6 +61,7 @@ from phd_swarm.nodes.markers import (
     _points,
     _segments,
     _xy,
+    marker_size,
 )
 
 #: RGBA of the things :data:`~phd_swarm.nodes.markers.COLOURS` does not have (tab10 hues).
@@ -169,6 +170,9 @@ class RobotMarkers:
         Header frame of every marker (the world frame).
     fov_radius : float
         Sensing radius [m], finite and >= 0 (0 draws no field of view).
+    size : float
+        Multiplies every size, line width and label offset
+        (:func:`~phd_swarm.nodes.markers.marker_size` of the map).
 
     Raises
     ------
@@ -176,12 +180,14 @@ class RobotMarkers:
         If ``fov_radius`` is negative or not finite.
     """
 
-    def __init__(self, robot_id: int, frame_id: str, fov_radius: float) -> None:
+    def __init__(self, robot_id: int, frame_id: str, fov_radius: float,
+                 size: float = 1.0) -> None:
         if not (math.isfinite(fov_radius) and fov_radius >= 0.0):
             raise ValueError(f"fov_radius must be a finite number >= 0, got {fov_radius!r}")
         self.robot_id = int(robot_id)
         self.frame_id = frame_id
         self.fov_radius = float(fov_radius)
+        self.size = float(size)
         self.prefix = topics.robot_namespace(self.robot_id).lstrip("/") + "/"
         angle = np.linspace(0.0, 2.0 * np.pi, FOV_SEGMENTS + 1)
         angle[-1] = 0.0  # closes the strip on its first point exactly
@@ -191,8 +197,8 @@ class RobotMarkers:
     def _new(self, stamp: Time, ns: str, marker_id: int, kind: int, scale: float,
              colour: str) -> Marker:
         """:func:`~phd_swarm.nodes.markers._marker` under the prefix, any named colour."""
-        m = _marker(stamp, self.frame_id, self.prefix + ns, marker_id, kind, scale,
-                    "robot_id")
+        m = _marker(stamp, self.frame_id, self.prefix + ns, marker_id, kind,
+                    self.size * scale, "robot_id")
         m.color = _colour(colour)
         return m
 
@@ -312,7 +318,7 @@ class RobotMarkers:
                                               strict=True)):
             text = self._new(stamp, "track_ids", i, Marker.TEXT_VIEW_FACING,
                              TRACK_ID_HEIGHT, "robot_id")
-            text.pose.position = Point(x=x, y=y + TRACK_ID_OFFSET)
+            text.pose.position = Point(x=x, y=y + self.size * TRACK_ID_OFFSET)
             text.text = str(tid)
             texts.append(text)
         n = len(texts)
@@ -337,7 +343,8 @@ def _markers(step: Step, memo: dict) -> MarkerArray:
     if "markers" not in memo:
         scenario = step.agent.team.scenario
         memo["markers"] = RobotMarkers(step.robot_id, step.frame_id,
-                                       float(scenario.models.detection.radius))
+                                       float(scenario.models.detection.radius),
+                                       marker_size(scenario.env))
     return memo["markers"].build(
         step.stamp(), step.agent.position, mixture_arrays(step),
         track_arrays(step) if step.provides("estimator", "tracks") else None,
