@@ -212,7 +212,7 @@ def run(opts: argparse.Namespace) -> int:
     interrupted = False
     code = 0
     server = None
-    view_server = viewer = None
+    view_server = None
     if opts.view:
         try:
             view_server = view_run.start_server(run_dir / "logs" / "view_server.log", PROG)
@@ -245,10 +245,12 @@ def run(opts: argparse.Namespace) -> int:
               flush=True)
         print(f"run_swarm: results in {run_dir}/", flush=True)
         if view_server is not None:
-            viewer = view_run.start_viewer(
-                view_run.env_for_viewer(env), view_server.grpc_url, run_dir / "view.rrd",
-                run_dir / "logs" / "viewer.log", run_dir.name,
-                observe_world=view_observes)
+            # A process of the run: its CPU is counted, it is stopped with the others. With
+            # a discovery server it is a super client, to see the whole graph (as the
+            # recorder's discover mode).
+            swarm.start("viewer", "phd_swarm.nodes.viewer", view_run.viewer_ros_args(
+                view_server.grpc_url, run_dir / "view.rrd", run_dir.name, view_observes),
+                env={"ROS_SUPER_CLIENT": "TRUE"} if server else None)
         # The observers first, each up (its subscriptions made) before the robots start:
         # with tens of processes starting at once, a recorder making its ~14 subscriptions
         # per robot got a slice of the CPU and was up 85 s after the robots, which had
@@ -308,21 +310,22 @@ def run(opts: argparse.Namespace) -> int:
             swarm.stop_many(["world", "monitor"], grace=10.0)
             if record:
                 swarm.stop_many(["recorder"], RECORDER_STOP_GRACE)
+            swarm.stop_many(["viewer"], view_run.VIEWER_STOP_GRACE)
             swarm.stop_all()
         if server is not None:
             stop_process_group(server, 5.0)
-        view_run.stop(viewer, None)
     wall = time.monotonic() - started
-    if view_server is not None:
-        if not interrupted:
-            view_run.hold(view_server, PROG, True if opts.view_hold else None)
-        view_server.close()
     _ensure_bag_metadata(run_dir / "run.mcap")
     if code == EXIT_NOT_READY:
         print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",
               file=sys.stderr)
-        return code
-    return _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
+    else:
+        code = _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
+    if view_server is not None:
+        if not interrupted and code != EXIT_NOT_READY:
+            view_run.hold(view_server, PROG, True if opts.view_hold else None)
+        view_server.close()
+    return code
 
 
 def _start_robots(swarm: Swarm, processes: list[NodeProcess], window: int) -> None:

@@ -12,7 +12,6 @@ and played back with the time slider; started from a script, it stops at once.
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import sys
@@ -90,15 +89,3 @@ def stop(viewer: subprocess.Popen | None, server: ViewServer | None) -> None:
         stop_process_group(viewer, VIEWER_STOP_GRACE)
     if server is not None:
         server.close()
-
-
-def env_for_viewer(env: dict[str, str]) -> dict[str, str]:
-    """The run's environment for the viewer.
-
-    With a discovery server the viewer is a super client, to see the whole graph (as the
-    recorder's ``discover`` mode).
-    """
-    out = dict(os.environ, **env)
-    if out.get("ROS_DISCOVERY_SERVER"):
-        out["ROS_SUPER_CLIENT"] = "TRUE"
-    return out

@@ -200,3 +200,18 @@ def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
     assert (row["mode"], row["processes"], row["exited"]) == ("profile", 10, 10), row["stuck"]
     assert row["all_matched"] == 10 and row["min_seen"] == 10
     assert row["cpu_s"] > 0 and row["max_rss_mb"] > 0
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+@pytest.mark.full
+def test_bench_view_quick_measures_the_demo_with_and_without_the_view(tmp_path):
+    result = _bench("view", "--quick", "--out", str(tmp_path), timeout=900)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(next(tmp_path.glob("view-*.json")).read_text())
+    rows = {r["way"]: r for r in data["results"]}
+    assert set(rows) == {"off", "view", "browser"}
+    assert rows["off"]["drop"] == 0.0
+    for r in rows.values():
+        assert r["steps_per_s"] > 0 and r["cpu_s"] > 0 and len(r["runs"]) == 1
+    assert "browser" in result.stdout and "drop" in result.stdout
