@@ -1,9 +1,9 @@
 """What the live view costs the demo: its stepping rate without and with ``--view``.
 
 And with a browser watching. Run with ``scripts/bench.sh view [--repeats 3] [--quick]``.
-Each repeat runs the demo (``config/dames_static.yaml``, 20 robots, 30 targets, 120 s of sim time, seed 1, lockstep,
-recorded; ``--quick``: 8 robots, 20 s) three ways, alternated so that the machine's drift
-falls on all of them alike:
+Each repeat runs the demo (``config/dames_static.yaml``, 20 robots, 30 targets, 120 s of
+sim time, seed 1, lockstep, recorded; ``--quick``: 8 robots, 20 s) three ways, alternated
+so that the machine's drift falls on all of them alike:
 
 - ``off``: ``scripts/run_swarm.sh`` as the demo runs it;
 - ``view``: with ``--view`` (the view server and the viewer node; nobody watching);
@@ -14,8 +14,8 @@ falls on all of them alike:
 It reports, per way, the stepping rate (steps per wall second while the world steps, from
 ``summary.json``), the run's CPU seconds (``cpu_s``, every process of the run, the viewer
 node included; not the Rerun server nor the browser) and the viewer's, the median over
-repeats, and the drop of the median rate against ``off``. Writes ``bench/results/view-<date>.json``.
-Processes are stopped by PID whatever happens.
+repeats, and the drop of the median rate against ``off``. Writes
+``bench/results/view-<date>.json``. Processes are stopped by PID whatever happens.
 """
 
 from __future__ import annotations
