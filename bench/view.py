@@ -35,6 +35,7 @@ from results_io import machine_meta, write_results
 
 from phd_swarm.testing import fresh_domain_id, loopback_env
 from phd_swarm.tools.browser_shot import Browser
+from phd_swarm.tools.processes import stop_process_group
 from phd_swarm.tools.view_shots import _URL
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,13 +58,7 @@ def one_run(way: str, out: Path, name: str, options: list[str]) -> dict[str, flo
             _watch(proc, log)
         proc.wait(timeout=1800)
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
+        stop_process_group(proc, 30.0)
     if proc.returncode != 0:
         raise RuntimeError(f"{name}: exit {proc.returncode}; see {log}")
     summary = json.loads((out / name / "summary.json").read_text())

@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from phd_swarm.logs.mcap_log import LogError, LogReader, LogRecord, open_log
+from phd_swarm.tools import view_run
 from phd_swarm.tools.replay_log import (
     NS,
     LogIndex,
@@ -364,12 +365,8 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
                    help="print what would be sent (per topic: type, count, first and last "
                         "log time, QoS) and exit without starting ROS")
     p.add_argument("--quiet", action="store_true", help="no progress and final lines")
-    p.add_argument("--view", action="store_true", help="watch the replay in a browser: "
-                   "serve the live view on 127.0.0.1, print its URL, and replay the topics "
-                   "it draws once it reads them (docs/view.md)")
-    p.add_argument("--view-hold", action="store_true", help="with --view: keep serving the "
-                   "view after the replay until Ctrl-C or SIGTERM (the default only from a "
-                   "terminal)")
+    view_run.add_options(p, "replay", "; replays the topics it draws, each once the view "
+                         "reads it")
     p.add_argument("--view-save", type=Path, metavar="FILE", help="with --view: also save "
                    "the view to FILE (.rrd; rerun FILE opens it)")
     opts = p.parse_args(list(argv))
@@ -516,7 +513,6 @@ def _replay_viewed(argv: list[str], opts: argparse.Namespace, log: LogReader,
     (``--wait-subscribers 1`` at least).
     """
     from phd_swarm.nodes.viewer import drawn_topics
-    from phd_swarm.tools import view_run
     from phd_swarm.tools.view_server import ViewServerError
 
     if not opts.topics:

@@ -155,12 +155,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--record-inboxes", action="store_true",
                    help="also record the protocol traffic (/robot_*/inbox) in run.mcap")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
-    p.add_argument("--view", action="store_true", help="watch the run live in a browser: "
-                   "serve the view on 127.0.0.1 and print its URL (docs/view.md; needs "
-                   "scripts/setup.sh --with-view)")
-    p.add_argument("--view-hold", action="store_true", help="with --view: keep serving the "
-                   "view after the run until Ctrl-C or SIGTERM (the default only when started "
-                   "from a terminal)")
+    view_run.add_options(p, "run")
     opts = p.parse_args(argv)
     if opts.start_window < 0:
         p.error(f"--start-window: a number of processes >= 0, got {opts.start_window}")

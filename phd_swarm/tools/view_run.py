@@ -12,6 +12,7 @@ and played back with the time slider; started from a script, it stops at once.
 
 from __future__ import annotations
 
+import argparse
 import signal
 import subprocess
 import sys
@@ -23,6 +24,16 @@ from phd_swarm.tools.view_server import ViewServer
 
 #: Seconds the viewer gets to draw what it holds and close its file.
 VIEWER_STOP_GRACE = 15.0
+
+
+def add_options(parser: argparse.ArgumentParser, what: str, note: str = "") -> None:
+    """``--view`` and ``--view-hold`` for a command that runs ``what`` (a run, a replay)."""
+    parser.add_argument("--view", action="store_true", help=f"watch the {what} in a browser: "
+                        f"serve the live view on 127.0.0.1 and print its URL{note} "
+                        "(docs/view.md; needs scripts/setup.sh --with-view)")
+    parser.add_argument("--view-hold", action="store_true", help="with --view: keep serving "
+                        f"the view after the {what} until Ctrl-C or SIGTERM (the default "
+                        "only when started from a terminal)")
 
 
 def viewer_ros_args(grpc_url: str, save_path: Path | None, name: str = "phd_swarm",

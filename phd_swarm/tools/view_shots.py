@@ -15,9 +15,7 @@ tolerance), so a blank page, a viewer without data or a map without robots fails
 from __future__ import annotations
 
 import argparse
-import os
 import re
-import signal
 import subprocess
 import sys
 import time
@@ -26,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from phd_swarm.tools.browser_shot import Browser, BrowserError
+from phd_swarm.tools.browser_shot import Browser
+from phd_swarm.tools.processes import BrowserError, stop_process_group
 
 #: The short demo of each system: config and run_swarm options.
 SYSTEMS: dict[str, tuple[str, tuple[str, ...]]] = {
@@ -97,13 +96,7 @@ def shoot_command(cmd: Sequence[str], out: Path, env: dict[str, str] | None = No
     except BrowserError as exc:
         raise RuntimeError(f"{' '.join(cmd)}: {exc}") from None
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
+        stop_process_group(proc, 30.0)
     return log.read_text()
 
 
