@@ -13,8 +13,8 @@ so that the machine's drift falls on all of them alike:
 
 It reports, per way, the stepping rate (steps per wall second while the world steps, from
 ``summary.json``), the run's CPU seconds (``cpu_s``, every process of the run, the viewer
-node included; not the Rerun server nor the browser) and the viewer's, the median over
-repeats, and the drop of the median rate against ``off``. Writes
+node and the Rerun server included, not the browser) and the view's (viewer and server),
+the median over repeats, and the drop of the median rate against ``off``. Writes
 ``bench/results/view-<date>.json``. Processes are stopped by PID whatever happens.
 """
 
@@ -64,7 +64,8 @@ def one_run(way: str, out: Path, name: str, options: list[str]) -> dict[str, flo
     summary = json.loads((out / name / "summary.json").read_text())
     return {"steps_per_s": summary["steps"] / summary["stepping_wall_s"],
             "cpu_s": sum(summary["cpu_s"].values()),
-            "viewer_cpu_s": summary["cpu_s"].get("viewer", 0.0)}
+            "viewer_cpu_s": summary["cpu_s"].get("viewer", 0.0)
+            + summary["cpu_s"].get("view_server", 0.0)}
 
 
 def _watch(proc: subprocess.Popen, log: Path) -> None:
@@ -108,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     base = statistics.median(r["steps_per_s"] for r in rows["off"])
     results = []
     print(f"{'way':8s} {'steps/s (median)':>17s} {'drop':>7s} {'CPU s (median)':>15s} "
-          f"{'viewer CPU s':>13s}")
+          f"{'view CPU s':>13s}")
     for way in WAYS:
         rate = statistics.median(r["steps_per_s"] for r in rows[way])
         cpu = statistics.median(r["cpu_s"] for r in rows[way])

@@ -28,6 +28,7 @@ an entity that flips y so that north is up on the screen.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,8 +61,9 @@ METRIC_FIELDS = {
 class Shape:
     """One thing to draw at an entity path (relative to the topic's entity).
 
-    ``kind`` is ``points`` (``positions`` (N, 2), ``radii`` (N,)), ``lines`` (``strips``,
-    a list of (M, 2) arrays, ``radii`` one per strip), ``labels`` (``positions``,
+    ``kind`` is ``points`` (``positions`` (N, 2), ``radii`` (N,)), ``lines`` (``strips``:
+    an (N, M, 2) array of equal-length strips or a list of (M_i, 2) arrays; ``radii`` one
+    per strip), ``labels`` (``positions``,
     ``labels``), ``image`` (``rgba`` (H, W, 4) uint8, ``origin`` and ``resolution``: pixel
     (col, row) covers ``origin + resolution * [col, row]``, row 0 at the lowest y) or
     ``clear`` (remove what the path held). ``colours`` is (N, 4) uint8 or one RGBA.
@@ -70,7 +72,7 @@ class Shape:
     path: str
     kind: str
     positions: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
-    strips: list[np.ndarray] = field(default_factory=list)
+    strips: np.ndarray | list[np.ndarray] = field(default_factory=list)
     radii: np.ndarray = field(default_factory=lambda: np.empty(0))
     colours: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), np.uint8))
     labels: list[str] = field(default_factory=list)
@@ -114,7 +116,13 @@ def _finite_rows(xy: np.ndarray) -> np.ndarray:
 
 
 class _Group:
-    """The points, lines and labels of one marker namespace, gathered over its markers."""
+    """The points, lines and labels of one marker namespace, gathered over its markers.
+
+    Lines are kept as blocks of equal-length strips, (n, m, 2) each (a line list's pairs
+    are one block), so that a namespace of equal-length strips goes to Rerun as one 3-D
+    array: its fast path, ~40x faster than a list of strips (300 field-of-view edges:
+    0.1 ms instead of 4 ms).
+    """
 
     def __init__(self) -> None:
         self.points: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
@@ -127,9 +135,14 @@ class _Group:
             xy, r, c = (np.concatenate(parts) for parts in zip(*self.points, strict=True))
             out.append(Shape(f"{ns}/points", "points", positions=xy, radii=r, colours=c))
         if self.strips:
-            out.append(Shape(f"{ns}/lines", "lines", strips=[s for s, _, _ in self.strips],
-                             radii=np.array([r for _, r, _ in self.strips]),
-                             colours=np.stack([c for _, _, c in self.strips])))
+            blocks = [b for b, _, _ in self.strips]
+            strips = np.concatenate(blocks) if len({b.shape[1] for b in blocks}) == 1 \
+                else [s for b in blocks for s in b]
+            out.append(Shape(f"{ns}/lines", "lines", strips=strips,
+                             radii=np.concatenate([np.full(len(b), r)
+                                                   for b, r, _ in self.strips]),
+                             colours=np.concatenate([np.tile(c, (len(b), 1))
+                                                     for b, _, c in self.strips])))
         if self.labels:
             out.append(Shape(f"{ns}/labels", "labels",
                              positions=np.stack([p for p, _, _ in self.labels]),
@@ -167,16 +180,13 @@ def marker_shapes(array: Mapping[str, Any]) -> list[Shape]:
             group.points.append((xy[ok], np.full(int(ok.sum()), 0.5 * scale[0]), colours))
         elif kind in (_LINE_STRIP, _LINE_LIST):
             xy = _placed(m, np.asarray(m["points"], dtype=float)[:, :2])
-            colour = _rgba8(m["color"])
             if kind == _LINE_STRIP:
-                pieces = [xy]
+                block = xy[_finite_rows(xy)][None]
             else:
                 pairs = xy[: len(xy) // 2 * 2].reshape(-1, 2, 2)
-                pieces = list(pairs[_finite_rows(pairs.reshape(-1, 4))])
-            for piece in pieces:
-                piece = piece[_finite_rows(piece)]
-                if len(piece) >= 2:
-                    group.strips.append((piece, 0.5 * scale[0], colour))
+                block = pairs[_finite_rows(pairs.reshape(-1, 4))]
+            if block.shape[0] and block.shape[1] >= 2:
+                group.strips.append((block, 0.5 * scale[0], _rgba8(m["color"])))
         elif kind == _TEXT:
             xy = _placed(m, np.zeros((1, 2)))[0]
             if np.isfinite(xy).all():
@@ -184,8 +194,18 @@ def marker_shapes(array: Mapping[str, Any]) -> list[Shape]:
         elif kind == _ARROW and len(m["points"]) >= 2:
             xy = _placed(m, np.asarray(m["points"], dtype=float)[:2, :2])
             if np.isfinite(xy).all():
-                group.strips.append((xy, 0.5 * scale[0], _rgba8(m["color"])))
+                group.strips.append((xy[None], 0.5 * scale[0], _rgba8(m["color"])))
     return cleared + [s for ns, g in groups.items() for s in g.shapes(ns)]
+
+
+@functools.cache
+def _viridis() -> np.ndarray:
+    """Matplotlib's viridis as a (256, 4) uint8 table (the table only; no figure)."""
+    from matplotlib import colormaps
+
+    lut = (255.0 * colormaps["viridis"](np.linspace(0.0, 1.0, 256))).astype(np.uint8)
+    lut.flags.writeable = False
+    return lut
 
 
 def _heat_rgba(values: np.ndarray) -> np.ndarray:
@@ -195,8 +215,7 @@ def _heat_rgba(values: np.ndarray) -> np.ndarray:
     background (its low-alpha pixels came out black), and viridis' dark end is the dark
     ground the markers' colours were chosen for (RViz2's).
     """
-    from matplotlib import colormaps  # the LUT only; no figure is made
-    lut = (255.0 * colormaps["viridis"](np.linspace(0.0, 1.0, 256))).astype(np.uint8)
+    lut = _viridis()
     v = np.sqrt(np.clip(np.nan_to_num(values, nan=0.0), 0.0, 1.0))
     rgba = lut[np.rint(255.0 * v).astype(np.intp)]
     rgba[..., 3] = 255
@@ -279,7 +298,13 @@ class Trails:
         self._history = np.concatenate([self._history[1:], row[None]], axis=0)
         self._count += 1
         kept = np.isfinite(self._history).all(axis=2)            # (steps, robots)
-        strips = [self._history[kept[:, j], j] for j in np.flatnonzero(kept.sum(axis=0) >= 2)]
+        counts = kept.sum(axis=0)
+        drawn = np.flatnonzero(counts >= 2)
+        if drawn.size and (kept[:, drawn] == kept[:, drawn[:1]]).all():
+            # The same steps for every trail (the usual case): one (robots, steps, 2) array.
+            strips = np.swapaxes(self._history[kept[:, drawn[0]]][:, drawn], 0, 1)
+        else:
+            strips = [self._history[kept[:, j], j] for j in drawn]
         return Shape("", "lines", strips=strips, radii=np.full(len(strips), 0.12),
                      colours=np.tile(np.array([[31, 119, 180, 110]], np.uint8),
                                      (len(strips), 1)))

@@ -69,6 +69,7 @@ from phd_swarm.tools.launch_plan import (
 )
 from phd_swarm.tools.processes import (
     Swarm,
+    process_cpu_seconds,
     stop_process_group,
 )
 from phd_swarm.tools.view_server import ViewServerError
@@ -315,6 +316,9 @@ def run(opts: argparse.Namespace) -> int:
         print(f"run_swarm: nothing was run; no summary written (logs in {run_dir}/logs/)",
               file=sys.stderr)
     else:
+        if view_server is not None:
+            # The view's server is part of what --view costs (docs/benchmarks.md).
+            swarm.cpu["view_server"] = process_cpu_seconds(view_server.pid)
         code = _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
     if view_server is not None:
         if not interrupted and code != EXIT_NOT_READY:

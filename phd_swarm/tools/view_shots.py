@@ -31,9 +31,9 @@ from phd_swarm.tools.processes import BrowserError, stop_process_group
 SYSTEMS: dict[str, tuple[str, tuple[str, ...]]] = {
     "dames": ("config/dames_static.yaml", ("--robots", "12", "--duration", "40")),
     "chen": ("config/chen_clustered.yaml", ("--robots", "12", "--duration", "40")),
-    "sung": ("config/sung_moving.yaml", ("--robots", "4", "--duration", "40")),
+    "sung": ("config/sung_moving.yaml", ("--duration", "300")),
     "shirsat": ("config/shirsat_small.yaml", ("--robots", "6", "--duration", "60")),
-    "papaioannou": ("config/papaioannou_small.yaml", ("--robots", "3", "--duration", "40")),
+    "papaioannou": ("config/papaioannou_small.yaml", ("--duration", "60")),
 }
 
 #: The repository (scripts/ and config/).
