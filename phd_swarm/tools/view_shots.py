@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from phd_swarm.tools.browser_shot import Browser
-from phd_swarm.tools.processes import BrowserError, stop_process_group
+from phd_swarm.tools.browser_shot import Browser, BrowserError
+from phd_swarm.tools.processes import stop_process_group
 
 #: The short demo of each system: config and run_swarm options.
 SYSTEMS: dict[str, tuple[str, tuple[str, ...]]] = {
