@@ -135,27 +135,43 @@ def _robot_relative(topic: str) -> tuple[str, str] | None:
 
 
 class _Composer:
-    """The robots' windows of one grid topic, composed per step (bin-wise maximum)."""
+    """The robots' windows of one grid topic, composed per step (bin-wise maximum).
+
+    Step k is drawn once every robot that sent a window of step k has sent a later one, or
+    once any window of step k + 2 or later arrives (a robot two steps behind is left out);
+    a window of a step already drawn is counted in :attr:`late` and not drawn.
+    """
 
     def __init__(self) -> None:
-        self.steps: dict[int, list[tuple[np.ndarray, int, int]]] = defaultdict(list)
+        self.steps: dict[int, dict[str, tuple[np.ndarray, int, int]]] = defaultdict(dict)
         self.stamps: dict[int, float] = {}
+        self.latest: dict[str, int] = {}
+        self.drawn_up_to = -1
+        self.late = 0
         self.grid: tuple[float, float, float] | None = None
 
-    def add(self, grid: dict[str, Any], stamp: float) -> list[tuple[float, scene.Shape]]:
-        """Take one window; return the finished steps' team layers, (stamp, shape) each."""
+    def add(self, robot: str, grid: dict[str, Any], stamp: float
+            ) -> list[tuple[float, scene.Shape]]:
+        """Take ``robot``'s window; return the finished steps' layers, (stamp, shape) each."""
         values, _, res = scene.density_values(grid)
-        self.grid = (float(grid["x_min"]), float(grid["y_min"]), res)
         k = int(grid["step"])
-        self.steps[k].append((values, int(grid["origin_row"]), int(grid["origin_col"])))
+        if k <= self.drawn_up_to:
+            self.late += 1
+            return []
+        self.grid = (float(grid["x_min"]), float(grid["y_min"]), res)
+        self.steps[k][robot] = (values, int(grid["origin_row"]), int(grid["origin_col"]))
         self.stamps[k] = stamp
-        return self.finish(before=k)
+        self.latest[robot] = max(self.latest.get(robot, -1), k)
+        newest = max(self.latest.values())
+        ready = [s for s in sorted(self.steps)
+                 if newest >= s + 2 or all(self.latest[r] > s for r in self.steps[s])]
+        return self.finish(ready)
 
-    def finish(self, before: int | None = None) -> list[tuple[float, scene.Shape]]:
-        """The team layers of every step before ``before`` (all steps if None)."""
+    def finish(self, steps: list[int] | None = None) -> list[tuple[float, scene.Shape]]:
+        """The team layers of ``steps`` (every pending step if None), in step order."""
         out = []
-        for k in sorted(s for s in self.steps if before is None or s < before):
-            windows = self.steps.pop(k)
+        for k in sorted(self.steps if steps is None else steps):
+            windows = list(self.steps.pop(k).values())
             rows = max(r + v.shape[0] for v, r, _ in windows)
             cols = max(c + v.shape[1] for v, _, c in windows)
             team = np.zeros((rows, cols))
@@ -163,7 +179,8 @@ class _Composer:
                 view = team[r:r + v.shape[0], c:c + v.shape[1]]
                 np.maximum(view, v, out=view)
             x_min, y_min, res = self.grid
-            out.append((self.stamps.pop(k), scene.grid_image(team, (x_min, y_min), res)))
+            out.append((self.stamps.pop(k), scene.grid_image(team, (x_min, y_min), res, "")))
+            self.drawn_up_to = max(self.drawn_up_to, k)
         return out
 
 
@@ -310,7 +327,7 @@ class ViewerNode(Node):
             self._at(stamp)
             self._log(MAP + topic, scene.grid_image(values, origin, res, ""))
             return
-        for when, shape in self._composers[robot[1]].add(msg, stamp):
+        for when, shape in self._composers[robot[1]].add(robot[0], msg, stamp):
             self._at(when)
             self._log(f"{MAP}/team/{robot[1]}", shape)
 

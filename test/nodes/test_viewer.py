@@ -112,3 +112,62 @@ def test_the_view_of_a_lockstep_run_has_every_step_and_the_monitors_phd(tmp_path
         pixels = np.asarray(logged_image.buffer.as_arrow_array()[0].values).reshape(
             expected.shape)
         np.testing.assert_array_equal(pixels, expected)
+
+
+def test_robots_grids_are_composed_per_step_and_bad_ones_counted():
+    """Two robots' search maps: step k's team layer is their bin-wise maximum.
+
+    It is drawn when a later step arrives (or at close); a grid whose data does not fit is
+    counted, not drawn, and the node goes on.
+    """
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    from phd_swarm.nodes import view_scene
+    from phd_swarm.nodes.viewer import MAP, ViewerNode
+    from phd_swarm.testing import InProcessRos
+    from phd_swarm_msgs.msg import DensityGrid
+
+    def grid(robot: int, step: int, values, width: int = 2) -> DensityGrid:
+        msg = DensityGrid(owner_id=robot, step=step, x_min=0.0, y_min=0.0, resolution=1.0,
+                          width=width, height=1, data=[float(v) for v in values])
+        msg.header.stamp.sec = step
+        return msg
+
+    rec = Recorded()
+    qos = QoSProfile(depth=10, durability=DurabilityPolicy.VOLATILE)
+    with InProcessRos() as ros:
+        pub = ros.node("robots")
+        writers = {r: pub.create_publisher(DensityGrid, f"/robot_{r}/search_map", qos)
+                   for r in (0, 1)}
+        viewer = ros.add(ViewerNode(recording=rec, context=ros.context))
+        ros.spin_until(lambda: all(w.get_subscription_count() for w in writers.values()),
+                       timeout=10)
+        def sent(*messages) -> None:
+            counts = {t: viewer.counts[t] + viewer.rejected[t] for t in viewer.counts}
+            for robot, msg in messages:
+                writers[robot].publish(msg)
+            want = {f"/robot_{r}/search_map": 0 for r, _ in messages}
+            for r, _ in messages:
+                want[f"/robot_{r}/search_map"] += 1
+            assert ros.spin_until(lambda: all(
+                viewer.counts[t] + viewer.rejected[t] == counts.get(t, 0) + n
+                for t, n in want.items()), timeout=10)
+
+        sent((0, grid(0, 0, [0.2, 0.0])), (1, grid(1, 0, [0.1, 0.9])))
+        assert not rec.logs[f"{MAP}/team/search_map"]            # step 0 may still grow
+        sent((1, grid(1, 1, [1.0], width=3)))                    # 3 bins, 1 value: refused
+        assert viewer.rejected["/robot_1/search_map"] == 1
+        sent((0, grid(0, 1, [0.5, 0.5])))                        # robot 1 has not moved on
+        assert not rec.logs[f"{MAP}/team/search_map"]
+        sent((0, grid(0, 2, [0.7, 0.7])))      # step 2: step 0 is done, and step 1 (robot 0's)
+        drawn = list(rec.logs[f"{MAP}/team/search_map"])
+        sent((1, grid(1, 0, [1.0, 1.0])))                        # too late for step 0
+        assert viewer._composers["search_map"].late == 1
+        viewer.close()
+        closed = rec.logs[f"{MAP}/team/search_map"][len(drawn):]
+    assert [t for t, _ in drawn] == [0.0, 1.0]
+    image = drawn[0][1][0]
+    pixels = np.asarray(image.buffer.as_arrow_array()[0].values).reshape(1, 2, 4)
+    expected = view_scene.grid_image(np.array([[0.2, 0.9]]), (0.0, 0.0), 1.0).rgba
+    np.testing.assert_array_equal(pixels, expected)
+    assert [t for t, _ in closed] == [2.0]                       # the rest, at close
