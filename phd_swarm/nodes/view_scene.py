@@ -238,10 +238,34 @@ def density_values(grid: Mapping[str, Any]) -> tuple[np.ndarray, tuple[float, fl
     return data.reshape(h, w), origin, res
 
 
+#: Largest heat map sent as it is [bins]; a larger grid (Chen's 0.1 m bins: 10^6 on the
+#: 100 x 100 m map) is reduced by the bin-wise maximum over f x f blocks, f the smallest
+#: integer that fits it, so its peaks stay visible and a step's image stays under 1 MB.
+MAX_IMAGE_BINS = 250_000
+
+
+def reduce_grid(values: np.ndarray, limit: int = MAX_IMAGE_BINS) -> tuple[np.ndarray, int]:
+    """``values`` (H, W), block-reduced by its maximum to at most ``limit`` bins; and f."""
+    f = max(1, int(np.ceil(np.sqrt(values.size / limit))))
+    while -(-values.shape[0] // f) * -(-values.shape[1] // f) > limit:
+        f += 1
+    if f == 1:
+        return values, 1
+    h, w = -(-values.shape[0] // f) * f, -(-values.shape[1] // f) * f
+    padded = np.zeros((h, w))
+    padded[:values.shape[0], :values.shape[1]] = values
+    return padded.reshape(h // f, f, w // f, f).max(axis=(1, 3)), f
+
+
 def grid_image(values: np.ndarray, origin: tuple[float, float], resolution: float,
                path: str = "grid") -> Shape:
-    """The heat-map image of (H, W) values; bin (row, col) covers origin + res * [col, row]."""
-    return Shape(path, "image", rgba=_heat_rgba(values), origin=origin, resolution=resolution)
+    """The heat-map image of (H, W) values; bin (row, col) covers origin + res * [col, row].
+
+    Grids over :data:`MAX_IMAGE_BINS` are reduced first (:func:`reduce_grid`).
+    """
+    values, f = reduce_grid(np.asarray(values, dtype=float))
+    return Shape(path, "image", rgba=_heat_rgba(values), origin=origin,
+                 resolution=resolution * f)
 
 
 def occupancy_image(grid: Mapping[str, Any], path: str = "grid") -> Shape:

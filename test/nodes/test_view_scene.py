@@ -141,3 +141,16 @@ def test_trails_keep_the_last_steps_of_each_robot():
     np.testing.assert_allclose(by_start[(0.0, 3.0)], [[0, 1], [0, 2], [0, 3]])  # 3 steps
     np.testing.assert_allclose(by_start[(1.0, 3.0)], [[1, 2], [1, 3]])   # NaN left out
     np.testing.assert_allclose(by_start[(9.0, 8.0)], [[9, 9], [9, 8]])
+
+
+def test_large_grids_are_reduced_by_their_maximum():
+    values = np.zeros((1000, 999))
+    values[0, 998] = 0.5                                   # a peak at the last column
+    reduced, f = scene.reduce_grid(values)
+    assert f == 2 and reduced.shape == (500, 500) and reduced.size <= scene.MAX_IMAGE_BINS
+    assert reduced[0, 499] == 0.5 and reduced.sum() == 0.5
+    image = scene.grid_image(values, (1.0, 2.0), 0.1)
+    assert image.rgba.shape == (500, 500, 4) and image.resolution == pytest.approx(0.2)
+    small = np.ones((3, 4))
+    assert scene.reduce_grid(small)[1] == 1 and scene.reduce_grid(small, limit=3)[0].shape \
+        == (1, 2)
