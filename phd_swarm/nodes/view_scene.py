@@ -44,6 +44,9 @@ _DELETE, _DELETEALL = 2, 3
 #: Steps of each robot's trail.
 TRAIL_STEPS = 40
 
+#: A trail's width, in robot diameters (the world's markers size the robots by the map).
+TRAIL_WIDTH = 0.24
+
 #: Fields of phd_swarm_msgs/TeamMetrics drawn, and their entity under ``metrics``.
 METRIC_FIELDS = {
     "ospa": "ospa/total",
@@ -302,6 +305,8 @@ class Trails:
 
     def __init__(self, steps: int = TRAIL_STEPS) -> None:
         self.steps = steps
+        #: Line radius [m]: TRAIL_WIDTH of the robots' spheres once their size is known.
+        self.radius = 0.5 * TRAIL_WIDTH
         self._ids = np.empty(0, dtype=np.int64)
         self._history = np.full((steps, 0, 2), np.nan)
         self._count = 0
@@ -329,7 +334,7 @@ class Trails:
             strips = np.swapaxes(self._history[kept[:, drawn[0]]][:, drawn], 0, 1)
         else:
             strips = [self._history[kept[:, j], j] for j in drawn]
-        return Shape("", "lines", strips=strips, radii=np.full(len(strips), 0.12),
+        return Shape("", "lines", strips=strips, radii=np.full(len(strips), self.radius),
                      colours=np.tile(np.array([[31, 119, 180, 110]], np.uint8),
                                      (len(strips), 1)))
 

@@ -12,7 +12,8 @@ shapes):
 - ``phd_swarm_msgs/DensityGrid`` and ``nav_msgs/OccupancyGrid``: heat maps. The team's
   grids (under ``/monitor``) are drawn as they are. The robots' grids of one name are
   composed into one team layer per step, the bin-wise maximum of the robots' windows of
-  that step, drawn once a window of a later step arrives: for the grid PHD's windows
+  that step, drawn once the robots that sent it have moved on (:class:`_Composer`): for
+  the grid PHD's windows
   (each bin owned by one robot, 0 elsewhere) that is the team PHD, for search maps the
   team's most recent search. Robots' grids whose name the monitor also publishes are not
   read (the team's is), nor an occupancy grid ``X_grid`` beside a density grid ``X``;
@@ -315,6 +316,11 @@ class ViewerNode(Node):
         markers = msg["markers"]
         if not markers:
             return
+        if topic == WORLD_DRAWN[1]:
+            # Trails as wide as the robots' spheres say (they scale with the map).
+            robots = [m for m in markers if m["ns"] == "robots" and m["scale"][0] > 0]
+            if robots:
+                self._trails.radius = 0.5 * scene.TRAIL_WIDTH * float(robots[0]["scale"][0])
         self._at(scene.stamp_seconds(markers[0]["header"]))
         for shape in scene.marker_shapes(msg):
             self._log(MAP + topic, shape)

@@ -102,6 +102,10 @@ def test_the_view_of_a_lockstep_run_has_every_step_and_the_monitors_phd(tmp_path
     # The team state of step 0 is published as the world starts, before the viewer (made
     # after it here) reads /world/robots (volatile); every later one is drawn.
     assert viewer.robots == robots and viewer.steps >= set(range(1, steps))
+    # Trails as wide as the map's robots: a 40 m map draws them at 0.4 of the 100 m size.
+    from phd_swarm.nodes.markers import marker_size
+    assert marker_size(scenario.env) == pytest.approx(0.4)
+    assert viewer._trails.radius == pytest.approx(0.5 * view_scene.TRAIL_WIDTH * 0.4)
     assert not viewer.rejected
     # The heat map of step k is the monitor's team PHD image of step k, pixel for pixel.
     by_time = {t: arch for t, arch in rec.logs[f"{MAP}/monitor/density"]}
