@@ -57,17 +57,21 @@ def step_figures(estimators: list[Any], truth: np.ndarray, c: float,
                  p: float) -> dict[str, float]:
     """The figures of one step (see the module docstring) of a one-robot team.
 
+    The paper's figures (its tracks, their Mahalanobis distances) are those of its one
+    robot; a team of several has none (an empty dict), so a multi-robot run is scored by
+    OSPA and cardinality alone rather than stopped (the monitor called this every step).
+
     Parameters
     ----------
     estimators : list of SungEstimator
-        The team's estimators; the paper's team is one robot (exactly one is required).
+        The team's estimators; the paper's team is one robot.
     truth : np.ndarray, shape (N, 2)
         True target positions at the step [m].
     c, p : float
         OSPA cut-off [m] and order.
     """
     if len(estimators) != 1:
-        raise ValueError(f"Sung & Tokekar's figures are for one robot, got {len(estimators)}")
+        return {}
     est = estimators[0]
     positions, covs, weights, track_ids = est.targets()
     return track_figures(est.mixture.weights, positions, covs, weights, track_ids,
