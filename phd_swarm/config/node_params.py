@@ -113,9 +113,10 @@ VIEWER = (
     ParamSpec("trail_steps", 40, "Positions kept in each robot's trail.", low=2,
               high=100_000),
     ParamSpec("observe_world", False, "Be one of the world's observers: read /world/truth "
-              "once /world/robots and /world/markers have matched their writer here, so a "
-              "lockstep world whose observers parameter counts the viewer starts step 0 "
-              "only when the view can draw every step (run_swarm.sh --view sets both)."),
+              "once /world/robots, /world/markers and every other topic drawn have matched "
+              "their writer here, so a lockstep world whose observers parameter counts the "
+              "viewer starts step 0 only when the view can draw every step (run_swarm.sh "
+              "--view sets both)."),
 )
 
 #: Node key in a config file -> its parameters.

@@ -22,9 +22,10 @@ shapes):
   alive and reporting against time.
 
 With ``observe_world`` the viewer is one of the world's observers (``run_swarm.sh --view``
-counts it in the world's ``observers``): it reads ``/world/truth`` only once its readers of
-the world's team state and markers have matched their writer, so a lockstep world starts
-step 0 only when the view can draw every step (as the recorder does for the log).
+counts it in the world's ``observers``): it reads ``/world/truth`` only once it reads the
+world's team state and markers and every reader it has made has matched a writer (the
+monitor's and the robots' topics exist before the world starts), so a lockstep world
+starts step 0 only when the view can draw every step (as the recorder does for the log).
 
 Each message is logged at its header's stamp on the ``sim_time`` timeline, so a live run,
 a replayed log (``scripts/replay.sh LOG --view``) and the saved ``.rrd`` all have the same
@@ -57,8 +58,9 @@ from phd_swarm.nodes import view_scene as scene
 from phd_swarm.nodes.ros_params import declare
 from phd_swarm_msgs.msg import DensityGrid, TargetSet, TeamMetrics, TeamState
 
-#: Reader QoS: reliable and volatile (compatible with every writer of ours and most others).
-VIEW_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
+#: Reader QoS: reliable and volatile (compatible with every writer of ours and most others),
+#: deep enough that a replay sent as fast as it can be loses nothing while the view draws.
+VIEW_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
                       reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
 
@@ -251,9 +253,9 @@ class ViewerNode(Node):
             handler = self._handler(topic, kind)
             self._subs[topic] = self.create_subscription(
                 DRAWN_TYPES[kind], topic, handler, VIEW_QOS, raw=True)
-        if self.params["observe_world"] and self._truth is None and all(
-                t in self._subs and self._subs[t].get_publisher_count() > 0
-                for t in WORLD_DRAWN):
+        if self.params["observe_world"] and self._truth is None and \
+                all(t in self._subs for t in WORLD_DRAWN) and \
+                all(sub.get_publisher_count() > 0 for sub in self._subs.values()):
             # Now the world may count the viewer (module docstring); the truth is not drawn
             # (the world's markers show the targets).
             self._truth = self.create_subscription(TargetSet, WORLD_TRUTH,
