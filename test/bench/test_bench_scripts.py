@@ -17,6 +17,13 @@ def _bench(*args: str, timeout: float) -> subprocess.CompletedProcess:
                           text=True, timeout=timeout, check=False)
 
 
+def _quick_results(suite: str, out: Path, *args: str, timeout: float) -> tuple[str, dict]:
+    """``scripts/bench.sh SUITE --quick ARGS --out OUT``: its stdout and its JSON file."""
+    result = _bench(suite, "--quick", *args, "--out", str(out), timeout=timeout)
+    assert result.returncode == 0, result.stderr
+    return result.stdout, json.loads(next(out.glob(f"{suite}-*.json")).read_text())
+
+
 def test_bench_core_quick_prints_and_writes_figures(tmp_path):
     result = _bench("core", "--quick", "--out", str(tmp_path), timeout=300)
     assert result.returncode == 0, result.stderr
@@ -173,9 +180,8 @@ def test_bench_papaioannou_quick_times_a_trial_and_the_reward(tmp_path):
 @pytest.mark.slow
 @pytest.mark.full
 def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
-    result = _bench("swarm", "--quick", "--out", str(tmp_path), timeout=600)
-    assert result.returncode == 0, result.stderr
-    rows = json.loads(next(tmp_path.glob("swarm-*.json")).read_text())["results"]
+    stdout, data = _quick_results("swarm", tmp_path, timeout=600)
+    rows = data["results"]
     assert [(r["layout"], r["processes"]) for r in rows] == [
         ("one process per robot", 4), ("2 robots per process", 2),
         ("all robots in one process", 1)]
@@ -183,7 +189,7 @@ def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
         assert r["robots"] == 4 and r["steps"] == 10 and r["dead_robots"] == []
         assert r["log_complete"] is True and r["cpu_ms_per_robot_step"] > 0
         assert 20 < r["peak_memory_mb_per_process"] < 2000
-    assert "complete" in result.stdout
+    assert "complete" in stdout
 
 
 def test_bench_swarm_rejects_an_unknown_layout():
@@ -206,12 +212,10 @@ def test_bench_discovery_quick_matches_ten_processes_on_the_profile(tmp_path):
 @pytest.mark.slow
 @pytest.mark.full
 def test_bench_view_quick_measures_the_demo_with_and_without_the_view(tmp_path):
-    result = _bench("view", "--quick", "--out", str(tmp_path), timeout=900)
-    assert result.returncode == 0, result.stderr
-    data = json.loads(next(tmp_path.glob("view-*.json")).read_text())
+    stdout, data = _quick_results("view", tmp_path, timeout=900)
     rows = {r["way"]: r for r in data["results"]}
     assert set(rows) == {"off", "view", "browser"}
     assert rows["off"]["drop"] == 0.0
     for r in rows.values():
         assert r["steps_per_s"] > 0 and r["cpu_s"] > 0 and len(r["runs"]) == 1
-    assert "browser" in result.stdout and "drop" in result.stdout
+    assert "browser" in stdout and "drop" in stdout
