@@ -71,7 +71,8 @@ ROOT, MAP = "/view", "/view/map"
 DRAW_ORDER = {"image": -10.0, "trails": 5.0, "lines": 10.0, "points": 20.0, "labels": 30.0}
 
 #: The world's topics the viewer must read before it counts as the world's observer.
-WORLD_DRAWN = ("/world/robots", "/world/markers")
+WORLD_ROBOTS, WORLD_MARKERS = "/world/robots", "/world/markers"
+WORLD_DRAWN = (WORLD_ROBOTS, WORLD_MARKERS)
 WORLD_TRUTH = "/world/truth"
 
 #: Message types drawn -> the message class.
@@ -123,7 +124,7 @@ def drawn_topics(graph: Mapping[str, Sequence[str]]) -> dict[str, str]:
         if robot and kind in ("phd_swarm_msgs/msg/DensityGrid",
                               "nav_msgs/msg/OccupancyGrid") and f"/monitor/{robot[1]}" in graph:
             continue        # the team's grid of that name is drawn instead
-        if kind == "phd_swarm_msgs/msg/TeamState" and topic != "/world/robots":
+        if kind == "phd_swarm_msgs/msg/TeamState" and topic != WORLD_ROBOTS:
             continue
         out[topic] = kind
     return out
@@ -293,8 +294,7 @@ class ViewerNode(Node):
     def _log(self, path: str, shape: scene.Shape, order: str | None = None) -> None:
         rr = self._rr
         entity = f"{path}/{shape.path}".rstrip("/") if shape.path else path
-        draw_order = DRAW_ORDER[order or shape.kind] if (order or shape.kind) in DRAW_ORDER \
-            else None
+        draw_order = DRAW_ORDER.get(order or shape.kind)
         if shape.kind == "clear":
             self.rec.log(entity, rr.Clear(recursive=True))
         elif shape.kind == "points":
@@ -318,7 +318,7 @@ class ViewerNode(Node):
         markers = msg["markers"]
         if not markers:
             return
-        if topic == WORLD_DRAWN[1]:
+        if topic == WORLD_MARKERS:
             # Trails as wide as the robots' spheres say (they scale with the map).
             robots = [m for m in markers if m["ns"] == "robots" and m["scale"][0] > 0]
             if robots:

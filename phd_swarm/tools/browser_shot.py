@@ -185,8 +185,8 @@ class Browser:
             time.sleep(every)
 
 
-def colours_check(colours: Sequence[tuple[int, int, int]], min_pixels: int = 50
-                  ) -> Callable[[np.ndarray], str]:
+def colours_check(colours: Sequence[tuple[int, int, int]], min_pixels: int = 50,
+                  tol: int = 12) -> Callable[[np.ndarray], str]:
     """A check for :meth:`Browser.shot_until`: ``min_pixels`` of each colour at least.
 
     With no colours: more than one colour on the page.
@@ -195,7 +195,7 @@ def colours_check(colours: Sequence[tuple[int, int, int]], min_pixels: int = 50
         if not colours:
             return "" if len(np.unique(pixels.reshape(-1, 3), axis=0)) > 1 else \
                 "a blank page"
-        counts = [colour_count(pixels, c) for c in colours]
+        counts = [colour_count(pixels, c, tol) for c in colours]
         short = [f"{c}: {n} pixels" for c, n in zip(colours, counts, strict=True)
                  if n < min_pixels]
         return "; ".join(short)

@@ -518,7 +518,8 @@ def _replay_viewed(argv: list[str], opts: argparse.Namespace, log: LogReader,
     if not opts.topics:
         opts.topics = list(drawn_topics({t: [lt.ros_type] for t, lt in index.topics.items()}))
     if not opts.topics:
-        print(f"{PROG}: error: {index.path} holds no topic the view draws", file=sys.stderr)
+        print(f"{PROG}: error: {index.path}: no topic the view draws (markers, grids, "
+              "team state, metrics)", file=sys.stderr)
         return 2
     selection = select(index, opts.topics, opts.start, opts.end)
     opts.wait_subscribers = max(1, opts.wait_subscribers)

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from phd_swarm.tools.browser_shot import Browser, BrowserError
+from phd_swarm.tools.browser_shot import Browser, BrowserError, colours_check
 from phd_swarm.tools.processes import stop_process_group
 
 #: The short demo of each system: config and run_swarm options.
@@ -48,23 +48,13 @@ _URL = re.compile(r"live view at (http://127\.0\.0\.1:\d+/\S+)")
 _HOLDING = "the view stays at"
 
 
-def near(pixels: np.ndarray, colour: tuple[int, int, int], tol: int = 40) -> int:
-    """Pixels within ``tol`` of ``colour`` in every channel."""
-    diff = np.abs(pixels.astype(np.int16) - np.asarray(colour, dtype=np.int16))
-    return int(np.count_nonzero((diff <= tol).all(axis=-1)))
+#: Colour tolerance of :func:`map_drawn` per channel: the browser anti-aliases and blends.
+DRAWN_TOL = 40
 
 
 def map_drawn(min_pixels: int = 40) -> Callable[[np.ndarray], str]:
-    """A :meth:`Browser.shot_until` check: robots and targets are on the map."""
-    def check(pixels: np.ndarray) -> str:
-        robots, targets = near(pixels, ROBOT_BLUE), near(pixels, TARGET_RED)
-        missing = []
-        if robots < min_pixels:
-            missing.append(f"robots: {robots} robot-blue pixels")
-        if targets < min_pixels:
-            missing.append(f"targets: {targets} target-red pixels")
-        return "; ".join(missing)
-    return check
+    """A :meth:`Browser.shot_until` check: robots (blue) and targets (red) on the map."""
+    return colours_check((ROBOT_BLUE, TARGET_RED), min_pixels, DRAWN_TOL)
 
 
 def shoot_command(cmd: Sequence[str], out: Path, env: dict[str, str] | None = None,

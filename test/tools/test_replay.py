@@ -116,6 +116,23 @@ def test_bad_files_exit_1_naming_the_file_and_the_problem(tmp_path):
         assert "Traceback" not in proc.stderr
 
 
+def test_view_of_a_log_without_a_drawn_topic_is_refused_before_anything_starts(tmp_path,
+                                                                               capsys):
+    from builtin_interfaces.msg import Time
+    from rclpy.serialization import serialize_message
+    from rosgraph_msgs.msg import Clock
+
+    from phd_swarm.logs.mcap_log import LogWriter
+
+    log = tmp_path / "clock_only.mcap"
+    with LogWriter(log) as writer:
+        writer.add_channel("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(CLOCK))
+        writer.write("/clock", serialize_message(Clock(clock=Time(sec=1))), 10, 10)
+    assert main([str(log), "--fast", "--view"]) == 2
+    err = capsys.readouterr().err
+    assert f"replay.sh: error: {log}: no topic the view draws" in err
+
+
 # ------------------------------------------------------------------------ recorded run
 def _dry_run(capsys, *args: str) -> dict[str, tuple[str, int, str, str]]:
     """``--dry-run`` lines by topic: (type, count, first_s, last_s); checks the exit code."""

@@ -15,18 +15,17 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
 from pathlib import Path
 
 import pytest
 
 from phd_swarm.testing import fresh_domain_id, loopback_env
-from phd_swarm.tools.browser_shot import png_pixels
+from phd_swarm.tools.browser_shot import colour_count, png_pixels
 from phd_swarm.tools.view_shots import (
+    DRAWN_TOL,
     ROBOT_BLUE,
     ROOT,
     TARGET_RED,
-    near,
     run_swarm_command,
     shoot_command,
     view_contents,
@@ -49,7 +48,8 @@ PER_STEP = ("/view/map/world/markers/robots/points", "/view/map/world/markers/ta
 
 def check_drawn(png: Path) -> None:
     pixels = png_pixels(png.read_bytes())
-    assert near(pixels, ROBOT_BLUE) >= 40 and near(pixels, TARGET_RED) >= 40
+    assert colour_count(pixels, ROBOT_BLUE, DRAWN_TOL) >= 40
+    assert colour_count(pixels, TARGET_RED, DRAWN_TOL) >= 40
     assert pixels.shape == (1000, 1600, 3)
 
 
@@ -96,16 +96,15 @@ def test_a_recorded_log_replayed_with_view_is_drawn_the_same(viewed_run, tmp_pat
     check_contents(tmp_path / "replay.rrd", [k * DT for k in range(STEPS)])
 
 
-def test_view_without_rerun_fails_before_starting_anything(tmp_path):
+def test_view_without_rerun_fails_before_starting_anything(tmp_path, children):
     """A machine without the view's extra: a clear error, exit 1, nothing started."""
-    env = loopback_env(fresh_domain_id())
     # a rerun_cli package without its binary, found first
-    env["PYTHONPATH"] = f"{tmp_path}:{env.get('PYTHONPATH', '')}"
     (tmp_path / "rerun_cli").mkdir()
     (tmp_path / "rerun_cli" / "__init__.py").write_text("")
-    proc = subprocess.run(run_swarm_command("config/dames_static.yaml", OPTIONS, tmp_path,
-                                            "noview"),
-                          env=env, capture_output=True, text=True, timeout=120)
+    path = f"{tmp_path}:{loopback_env(0).get('PYTHONPATH', '')}"
+    proc = children.start(run_swarm_command("config/dames_static.yaml", OPTIONS, tmp_path,
+                                            "noview"), env={"PYTHONPATH": path})
+    _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 1
-    assert "the live view needs rerun-sdk: scripts/setup.sh --with-view" in proc.stderr
+    assert "the live view needs rerun-sdk: scripts/setup.sh --with-view" in stderr
     assert not (tmp_path / "noview" / "logs" / "world.log").exists()

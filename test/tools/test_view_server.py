@@ -63,3 +63,33 @@ def test_the_view_server_listens_on_loopback_only_and_stops():
         pid = server.pid
     assert not Path(f"/proc/{pid}").exists() or \
         Path(f"/proc/{pid}/status").read_text().find("State:\tZ") >= 0
+
+
+def test_the_commands_serve_a_view_and_shoot_it(tmp_path, children):
+    """The view server's and the screenshot's commands, as users run them.
+
+    ``python -m phd_swarm.tools.view_server`` prints the URL and serves until Ctrl-C;
+    ``python -m phd_swarm.tools.browser_shot URL OUT`` writes a screenshot of it that is
+    not one colour.
+    """
+    import sys
+
+    import numpy as np
+
+    from phd_swarm.tools.browser_shot import png_pixels
+
+    server = children.start([sys.executable, "-m", "phd_swarm.tools.view_server"])
+    line = server.stdout.readline()
+    url = re.fullmatch(r"view: (http://127\.0\.0\.1:\d+/\?url=\S+)\n", line)
+    assert url, line
+    assert "rerun_url:=rerun+http://127.0.0.1:" in server.stdout.readline()
+    out = tmp_path / "shot.png"
+    shot = children.start([sys.executable, "-m", "phd_swarm.tools.browser_shot",
+                           url.group(1), str(out), "--size", "800x600", "--timeout", "120"])
+    stdout, stderr = shot.communicate(timeout=180)
+    assert shot.returncode == 0, stderr
+    pixels = png_pixels(out.read_bytes())
+    assert pixels.shape == (600, 800, 3)
+    assert len(np.unique(pixels.reshape(-1, 3), axis=0)) > 1
+    children.stop(server, grace=10.0)
+    assert server.returncode == 0
