@@ -545,6 +545,14 @@ def type_name(typ: type) -> str:
     return f"{typ.__module__.split('.')[0]}/msg/{typ.__name__}"
 
 
+@functools.cache
+def string_cdr(text: str) -> bytes:
+    """``text`` as a CDR string (length with the NUL, bytes, NUL), padded to 4 bytes."""
+    raw = text.encode()
+    out = struct.pack("<I", len(raw) + 1) + raw + b"\x00"
+    return out + bytes(-len(out) % 4)
+
+
 def encode(typ: type, fields: Mapping[str, Any]) -> bytes:
     """The CDR of a ``typ`` message with ``fields`` (see the module docstring for values).
 

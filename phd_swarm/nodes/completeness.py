@@ -98,7 +98,7 @@ def step_topics(robots: int, outputs: Iterable[str] = ("density", "cell", *ROBOT
     system's).
     """
     out = [name for name, (_, qos, *_) in T.TEAM_TOPICS.items()
-           if qos == "STEP" or name == T.CLOCK]
+           if (qos == "STEP" or name == T.CLOCK) and name not in T.TEAM_TRANSPORT]
     if not monitor_density:
         out.remove(T.MONITOR_DENSITY)
     kinds = [k for k in T.ROBOT_TOPICS if k in ROBOT_INPUTS] + list(dict.fromkeys(outputs))

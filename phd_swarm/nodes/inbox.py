@@ -20,7 +20,6 @@ decodes an envelope into ROS messages with rclpy, e.g. one seen with ``ros2 topi
 
 from __future__ import annotations
 
-import functools
 import struct
 from array import array
 from collections.abc import Collection, Mapping, Sequence
@@ -56,17 +55,9 @@ def pack_cdr(sender: int, pieces: Sequence[tuple[str, bytes]]) -> bytes:
     n = len(pieces)
     offsets = list(accumulate((len(b) for _, b in pieces), initial=0))
     return b"".join((cdr.ENCAPSULATION, struct.pack("<iI", sender, n),
-                     *[_kind_cdr(k) for k, _ in pieces],
+                     *[cdr.string_cdr(k) for k, _ in pieces],
                      struct.pack(f"<{n + 2}I", n + 1, *offsets),
                      struct.pack("<I", offsets[-1]), *[b for _, b in pieces]))
-
-
-@functools.cache
-def _kind_cdr(kind: str) -> bytes:
-    """``kind`` as a CDR string (length counting the NUL, bytes, NUL), padded to 4 bytes."""
-    raw = kind.encode()
-    out = struct.pack("<I", len(raw) + 1) + raw + b"\x00"
-    return out + bytes(-len(out) % 4)
 
 
 def unpack_cdr(data: bytes, kinds: Collection[str]) -> tuple[int, list[tuple[str, bytes]]]:

@@ -42,11 +42,12 @@ from nav_msgs.msg import OccupancyGrid
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import MONITOR, SHARED
 from phd_swarm.core.scoring import score_estimates, score_step, series_summary
-from phd_swarm.nodes import completeness, convert, occupancy
+from phd_swarm.nodes import bundle, completeness, convert, occupancy
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.markers import marker_size, team_markers_cdr
 from phd_swarm.nodes.observe import TeamReader, add_windows, union
@@ -55,6 +56,7 @@ from phd_swarm.nodes.ros_params import declare, declare_scenario
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
+    MessageBundle,
     RobotStatus,
     TargetSet,
     TeamMetrics,
@@ -152,16 +154,15 @@ class MonitorNode(Node):
                                  subscription_qos("STEP"))
         self.create_subscription(TeamState, T.WORLD_ROBOTS, self._on_team,
                                  subscription_qos("STEP"))
-        for r in ids:
-            for kind in self.inputs:
-                self.create_subscription(self.reader.types[kind], T.robot_topic(r, kind),
-                                         self._output_callback(r, kind),
-                                         subscription_qos("STEP"))
-            self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
-                                     self._on_status, subscription_qos("STEP"))
-            if "cell" in outputs:
-                self.create_subscription(CellPolygon, T.robot_topic(r, "cell"),
-                                         self._on_cell, subscription_qos("LATCHED"))
+        # The robots' statuses and step outputs on two team topics (bundle.py): a reader
+        # per kind and robot made the monitor's participant walk 3 N readers per sample.
+        self._types = {**self.reader.types, **({"cell": CellPolygon} if "cell" in outputs
+                                                else {})}
+        self._prefix = {r: T.robot_namespace(r) + "/" for r in ids}
+        self.create_subscription(RobotStatus, T.TEAM_STATUS, self._on_status,
+                                 subscription_qos("STEP"))
+        self.create_subscription(MessageBundle, T.TEAM_OUTPUTS, self._on_bundle,
+                                 subscription_qos("STEP"), raw=True)
         self.create_timer(0.5, self._on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f"monitor: watching {self.scenario.robots} robots "
                                f"({', '.join(self.inputs)}, status)")
@@ -190,18 +191,34 @@ class MonitorNode(Node):
             self._reject(f"team state of step {msg.step}: {exc}")
         self._touch()
 
-    def _output_callback(self, robot: int, kind: str):
-        def callback(msg) -> None:
-            if msg.step >= self.next_step:
-                got = self.outputs[msg.step][robot]
-                got[kind] = msg
-                if len(got) == len(self.inputs):  # only the input kinds are subscribed
-                    self._complete[msg.step].add(robot)
-            self._touch()
-        return callback
+    def _on_bundle(self, data: bytes) -> None:
+        """A robot's step outputs: the input kinds kept for the step, the cell drawn."""
+        try:
+            robot, step, pieces = bundle.unpack_cdr(data)
+            prefix = self._prefix.get(robot)
+            if prefix is None:
+                raise convert.InvalidMessage(f"sender {robot} is no robot of this run")
+            msgs = {}
+            for topic, piece in pieces:
+                kind = topic[len(prefix):]
+                if topic.startswith(prefix) and kind in self._types:
+                    msgs[kind] = deserialize_message(piece, self._types[kind])
+        except Exception as exc:  # noqa: BLE001 - rclpy raises a bare error on bad CDR
+            self._reject(f"bundle on {T.TEAM_OUTPUTS}: {exc}")
+            return
+        if "cell" in msgs:
+            self._on_cell(msgs.pop("cell"))
+        if step >= self.next_step and msgs:
+            got = self.outputs[step][robot]
+            got.update(msgs)
+            if all(kind in got for kind in self.inputs):
+                self._complete[step].add(robot)
+        self._touch()
 
     def _on_status(self, msg: RobotStatus) -> None:
-        if msg.state == RobotStatus.STATE_STEP_DONE and msg.step >= self.next_step:
+        if msg.robot_id not in self._prefix:
+            self._reject(f"status of robot {msg.robot_id}: no robot of this run")
+        elif msg.state == RobotStatus.STATE_STEP_DONE and msg.step >= self.next_step:
             self.statuses[msg.step][msg.robot_id] = msg
             if math.isfinite(msg.goal.x) and math.isfinite(msg.goal.y):
                 self.goals[msg.robot_id] = np.array([msg.goal.x, msg.goal.y])

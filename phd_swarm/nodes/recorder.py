@@ -61,7 +61,6 @@ Shutdown
 
 from __future__ import annotations
 
-import importlib
 import json
 import re
 import struct
@@ -69,14 +68,13 @@ import sys
 import time
 from collections import defaultdict
 from collections.abc import Callable
-from functools import cache
 from typing import Any
 
 import numpy as np
 from rclpy.clock import Clock, ClockType
 from rclpy.logging import get_logger
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.serialization import deserialize_message
 
 from phd_swarm.config import load_run_config
@@ -84,13 +82,22 @@ from phd_swarm.config.node_params import RECORDER, SHARED
 from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError, LogWriter
 from phd_swarm.logs.qos_yaml import qos_yaml
-from phd_swarm.logs.schemas import SEPARATOR, DefinitionNotFoundError, message_definition
+from phd_swarm.logs.schemas import DefinitionNotFoundError
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.diagnostics import GapCounter, RecorderHealth, recorder_status
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
+from phd_swarm.nodes.record_topics import (
+    accepts,
+    adapted_qos,
+    message_class,
+    reader_qos,
+    starts_with_stamp,
+    table_spec,
+)
 from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import ParameterError, declare
+from phd_swarm.nodes.team_routes import TeamRoutes, status_state
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
 #: Topics the graph poll records: /clock, /diagnostics and everything under /world,
@@ -105,125 +112,13 @@ DISCOVER_PERIOD = 0.5
 SETTLE_QUIET = 1.0
 SETTLE_MAX = 10.0
 
-#: Reader depth for topics outside the table.
-DEFAULT_DEPTH = 100
-
 #: Period of the check for the world's writers [s] (wall time), and of its progress lines.
 WORLD_CHECK_PERIOD = 0.2
 WORLD_LOG_PERIOD = 5.0
 
-#: Least reader depth on table topics: deeper than the table's readers, so that a burst
-#: (every robot's inbox traffic of a step) is not overwritten before the executor takes it.
-#: Depth does not affect QoS compatibility.
-MIN_TABLE_DEPTH = 1000
-
-_ROBOT_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/(.+)$")
 _INBOX_TOPIC = re.compile(rf"^/{T.ROBOT_PREFIX}\d+/inbox$")
-_U32_LE = struct.Struct("<I")
-_U32_BE = struct.Struct(">I")
-_STAMP_TYPES = ("std_msgs/Header", "builtin_interfaces/Time")
 _STAMP_LE = struct.Struct("<iI")
 _STAMP_BE = struct.Struct(">iI")
-
-
-def message_class(ros_type: str) -> type:
-    """The Python class of ``pkg/msg/Type`` (ValueError if it is not installed)."""
-    pkg, kind, name = (ros_type.split("/") + ["", ""])[:3]
-    try:
-        return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
-    except (ImportError, AttributeError, ValueError):
-        raise ValueError(f"no Python message class for {ros_type!r}") from None
-
-
-@cache
-def starts_with_stamp(ros_type: str) -> bool:
-    """Whether the first field of ``ros_type`` is a ``std_msgs/Header`` or a ``Time``.
-
-    Then the CDR bytes 4-12 (after the 4-byte encapsulation header) are the stamp's
-    ``int32 sec`` and ``uint32 nanosec``.
-    """
-    try:
-        text = message_definition(ros_type)
-    except DefinitionNotFoundError:
-        return False
-    for line in text.split(f"\n{SEPARATOR}\n", 1)[0].splitlines():
-        words = line.split("#", 1)[0].split(None, 1)
-        if len(words) < 2 or "=" in words[1]:
-            continue  # blank, comment or constant
-        return words[0] in (*_STAMP_TYPES, "Header")
-    return False
-
-
-def table_spec(topic: str, robot_table: dict[str, tuple[str, ...]] = T.ROBOT_TOPICS
-               ) -> tuple[str, str] | None:
-    """(type, QoS name) of ``topic`` in :mod:`phd_swarm.nodes.topics`, or None.
-
-    ``robot_table``: a robot's topics by relative name (:func:`~phd_swarm.nodes.topics.
-    robot_topics` of the run's declared outputs; by default those of every robot).
-    """
-    if topic in T.TEAM_TOPICS:
-        typ, qos_name, *_ = T.TEAM_TOPICS[topic]
-        return typ, qos_name
-    match = _ROBOT_TOPIC.match(topic)
-    if match and match.group(1) in robot_table:
-        typ, qos_name, *_ = robot_table[match.group(1)]
-        return typ, qos_name
-    return None
-
-
-def adapted_qos(offers: list[Any]) -> QoSProfile:
-    """A reader profile that matches every offered profile in ``offers`` (rosbag2's rule).
-
-    Reliable if every publisher is reliable, transient-local if every publisher is; keep
-    last :data:`DEFAULT_DEPTH`. Without offers: reliable and volatile.
-    """
-    reliable = all(o.reliability == ReliabilityPolicy.RELIABLE for o in offers)
-    latched = bool(offers) and all(o.durability == DurabilityPolicy.TRANSIENT_LOCAL
-                                   for o in offers)
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST, depth=DEFAULT_DEPTH,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-
-
-def status_state(data: bytes) -> int:
-    """``state`` of a CDR-serialised ``RobotStatus`` (after the header's stamp and frame id).
-
-    The field is a ``uint8`` (no alignment) right after the frame id string (a ``uint32``
-    length that counts the terminating NUL, then the bytes).
-    """
-    u32 = _U32_LE if data[1] & 1 else _U32_BE
-    (n,) = u32.unpack_from(data, 12)
-    return data[16 + n]
-
-
-def reader_qos(qos_name: str) -> QoSProfile:
-    """The recorder's reader profile for table QoS ``qos_name``: the table's, deepened.
-
-    Keep-all profiles stay keep-all (depth does not apply to them).
-    """
-    table = subscription_qos(qos_name)
-    if table.history == HistoryPolicy.KEEP_ALL:
-        return table
-    return QoSProfile(history=table.history, depth=max(table.depth, MIN_TABLE_DEPTH),
-                      reliability=table.reliability, durability=table.durability)
-
-
-def accepts(reader: QoSProfile, offers: list[Any]) -> bool:
-    """Whether a ``reader`` profile matches every offered profile in ``offers``.
-
-    Only reliability and durability decide it here: a reliable reader needs reliable
-    writers, a transient-local reader transient-local writers (deadline and liveliness are
-    left at their defaults by phd_swarm).
-    """
-    for offer in offers:
-        if reader.reliability == ReliabilityPolicy.RELIABLE \
-                and offer.reliability != ReliabilityPolicy.RELIABLE:
-            return False
-        if reader.durability == DurabilityPolicy.TRANSIENT_LOCAL \
-                and offer.durability != DurabilityPolicy.TRANSIENT_LOCAL:
-            return False
-    return True
 
 
 class Recorder(Node):
@@ -258,6 +153,8 @@ class Recorder(Node):
             raise ParameterError(f"node {self.get_fully_qualified_name()}: parameter output: "
                                  f"{exc}") from None
         self._subs: dict[str, Any] = {}
+        #: Topics whose messages arrive inside the team topics (team_routes.py).
+        self.routes = TeamRoutes(self.get_logger().warning)
         self._skipped: set[str] = set()
         self._inboxes = self.params["record_inboxes"]
         #: Completeness bookkeeping (with a run config): step topic -> steps seen, and
@@ -294,13 +191,13 @@ class Recorder(Node):
             self.discover()
         #: Its health on /diagnostics, once per wall second (:meth:`health`).
         self.diagnostics = DiagnosticsReporter(self, self.health, recorder_status)
-        self.get_logger().info(f"recording {len(self._subs)} topics to {self.log.path}"
+        self.get_logger().info(f"recording {len(self.topics)} topics to {self.log.path}"
                                + (" (discovering more)" if self._timer else ""))
 
     @property
     def topics(self) -> tuple[str, ...]:
-        """Topics subscribed so far."""
-        return tuple(self._subs)
+        """Topics recorded so far: subscribed, or carried by a team topic subscribed."""
+        return (*(t for t in self._subs if t not in T.TEAM_TRANSPORT), *self.routes.topics)
 
     @property
     def message_count(self) -> int:
@@ -325,9 +222,15 @@ class Recorder(Node):
         outputs = T.declared_outputs(s.system, bool(rc.param("robot", "publish_density")))
         self._robot_table = T.robot_topics(outputs)
         wait = self.params["wait_for_world"]
-        for spec in T.run_topics(range(s.robots), outputs):
+        specs = T.run_topics(range(s.robots), outputs)
+        for spec in specs:  # those the team topics carry first: a channel, no reader
+            if spec.via:
+                self.route(spec.via, spec.name, spec.type, qos_yaml(publisher_qos(spec.qos)))
+        for spec in specs:
             if wait and spec.name == T.WORLD_TRUTH:
                 self._truth_spec = spec
+            elif spec.via:
+                continue
             elif self._inboxes or not _INBOX_TOPIC.match(spec.name):
                 self.subscribe(spec.name, spec.type, reader_qos(spec.qos),
                                qos_yaml(publisher_qos(spec.qos)))
@@ -372,20 +275,33 @@ class Recorder(Node):
             return True
         if topic in self._skipped:
             return False
+        carries = topic in self.routes.team_topics  # a team topic: no channel of its own
         try:
             msg_class = message_class(ros_type)
-            self.log.add_channel(topic, ros_type, offered_qos_yaml)
+            if not carries:
+                self.log.add_channel(topic, ros_type, offered_qos_yaml)
         except (ValueError, DefinitionNotFoundError) as exc:
             self._skipped.add(topic)
             self.get_logger().warning(f"not recording {topic} ({ros_type}): {exc}")
             return False
+        callback = (self.routes.callback(topic) if carries
+                    else self._recording(topic, ros_type))
+        self._subs[topic] = self.create_subscription(msg_class, topic, callback, qos, raw=True)
+        return True
+
+    def route(self, via: str, topic: str, ros_type: str, offered_qos_yaml: str = "") -> None:
+        """Record ``topic``'s messages that arrive inside team topic ``via`` (team_routes.py)."""
+        self.log.add_channel(topic, ros_type, offered_qos_yaml)
+        self.routes.add(via, topic, self._recording(topic, ros_type))
+
+    def _recording(self, topic: str, ros_type: str) -> Callable[[bytes], None]:
+        """What becomes of a message of ``topic``: written, its step noted (step topics)."""
         callback = self._callback(topic, starts_with_stamp(ros_type))
         if topic == T.DIAGNOSTICS:
             callback = self._others(callback)
         if topic in self._step_topics:
             callback = self._step_callback(topic, callback)
-        self._subs[topic] = self.create_subscription(msg_class, topic, callback, qos, raw=True)
-        return True
+        return callback
 
     def _callback(self, topic: str, stamped: bool) -> Callable[[bytes], None]:
         """The subscription callback of ``topic``: time stamps and bytes to the log."""
@@ -453,7 +369,7 @@ class Recorder(Node):
         """
         if not self._step_topics:
             return None
-        topics = [t for t in self._subs if t in self._step_topics]
+        topics = [t for t in self.topics if t in self._step_topics]
         if self._truth_spec is not None and self._truth_spec.name not in self._subs:
             topics.append(self._truth_spec.name)  # never subscribed: all of it is missing
         return completeness.check(self._steps, self._team, self._robots, topics, self._window)
@@ -464,7 +380,7 @@ class Recorder(Node):
             return None
         gaps = self._gaps.update(self._steps, self._team) if self._gaps else {}
         return RecorderHealth(
-            self.log.message_count, len(self._subs), max(self._team, default=-1), gaps,
+            self.log.message_count, len(self.topics), max(self._team, default=-1), gaps,
             self._gaps.expected if self._gaps else 0,
             len(self._world_topics) if self._world_timer is not None else 0)
 
@@ -472,6 +388,7 @@ class Recorder(Node):
         """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""
         for topic, types in self.get_topic_names_and_types():
             if topic in self._subs or topic in self._skipped or not RECORDED.match(topic) \
+                    or topic in self.routes.topics or T.BUNDLE_TYPE in types \
                     or (not self._inboxes and _INBOX_TOPIC.match(topic)):
                 continue
             if len(types) != 1:

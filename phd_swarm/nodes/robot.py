@@ -17,8 +17,11 @@ a cell, or Gaussian components, tracks and markers...). Per step k:
    sender, right address, step in range) and fed to the protocol; bad ones are dropped with
    a logged reason and counted (``rejected_messages`` in the status);
 3. when the protocol step is done, the controller picks the goal and the next power weight;
-   the node publishes its outputs (:class:`~phd_swarm.nodes.robot_outputs.RobotOutputs`),
-   the goal and a ``STEP_DONE`` status, which is what the world waits for in lockstep mode.
+   the node publishes its outputs and the goal (one bundle on ``/team/outputs``:
+   :class:`~phd_swarm.nodes.robot_outputs.RobotOutputs`) and a ``STEP_DONE`` status on
+   ``/team/status``, which is what the world waits for in lockstep mode. Each also goes to
+   the robot's own topic (``status``, ``goal``, ``estimates``...) while a reader is
+   matched there (:mod:`phd_swarm.nodes.bundle`).
 
 A wall-clock timer (``tick_period``) stands in for the in-memory engine's rounds: if no
 new protocol message arrived during a period while the step waits, one round passes
@@ -57,7 +60,8 @@ whole tick periods. The protocol re-sends what a waiting peer lacks when its kee
 arrives, so a lost message costs time, not a robot.
 
 At start-up the robot waits for the world's team state to initialise its partition, and for
-``observers`` subscribers on its status and density, then reports ``READY``. It refuses to
+the world and ``observers`` readers on ``/team/status`` (``observers`` on ``/team/outputs``),
+then reports ``READY``. It refuses to
 start when another node already publishes this robot id's status (a duplicate robot id).
 
 Once per wall second it reports its health on ``/diagnostics`` (:meth:`RobotNode.health`,
@@ -74,9 +78,10 @@ from collections import defaultdict, deque
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import Point, PoseStamped
+from geometry_msgs.msg import Point
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.serialization import serialize_message
 
 from phd_swarm.config.node_params import ROBOT, SHARED
 from phd_swarm.core.agent import Team
@@ -85,6 +90,7 @@ from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
 from phd_swarm.core.scan import Scan
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes import topics as T
+from phd_swarm.nodes.bundle import publish_watched
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.diagnostics import RobotHealth, robot_status
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
@@ -176,7 +182,9 @@ class RobotNode(Node):
             raise ParameterError(f"duplicate robot id {rid}: another node already publishes "
                                  f"{self.resolve_topic_name('status')}")
         self.status_pub = self.create_publisher(RobotStatus, "status", publisher_qos("STEP"))
-        self.goal_pub = self.create_publisher(PoseStamped, "goal", publisher_qos("STEP"))
+        #: The team's status topic, which the world and the observers read (bundle.py).
+        self.team_status_pub = self.create_publisher(RobotStatus, T.TEAM_STATUS,
+                                                     publisher_qos("STEP"))
         #: The step outputs the system's parts bring (density, cell, estimates, components...).
         self.outputs = RobotOutputs(self, self.agent, self.params["publish_density"])
         self.create_subscription(MeasurementSet, "measurements", self._on_scan,
@@ -271,9 +279,9 @@ class RobotNode(Node):
             self.get_logger().warning(f"robot {self.robot_id}: the run is at step {latest}; "
                                       "rejoining the team")
         self.ready = True
-        self.status_pub.publish(RobotStatus(header=convert.header(0, self.dt, self.frame_id),
-                                            state=RobotStatus.STATE_READY,
-                                            robot_id=self.robot_id))
+        self._publish_status(RobotStatus(header=convert.header(0, self.dt, self.frame_id),
+                                         state=RobotStatus.STATE_READY,
+                                         robot_id=self.robot_id))
         self._start_pending()
 
     def _unmatched(self) -> str:
@@ -284,9 +292,10 @@ class RobotNode(Node):
         """
         need = self.params["observers"]
         missing = []
-        status = self.status_pub.get_subscription_count()
+        status = self.team_status_pub.get_subscription_count()
         if status < 1 + need:
-            missing.append(f"status: {status} of {1 + need} readers (world and observers)")
+            missing.append(f"{T.TEAM_STATUS}: {status} of {1 + need} readers (world and "
+                           "observers)")
         for topic in self.outputs.unmatched(need):
             missing.append(f"{topic}: fewer than {need} observers")
         peers = sorted(dst for dst, pub in self._peer_pubs.items()
@@ -440,7 +449,7 @@ class RobotNode(Node):
             else:
                 continue
             try:
-                self.status_pub.publish(RobotStatus(
+                self._publish_status(RobotStatus(
                     header=convert.header(max(step, 0), self.dt, self.frame_id),
                     state=RobotStatus.STATE_WORKING, robot_id=self.robot_id,
                     step=max(step, 0)))
@@ -492,9 +501,8 @@ class RobotNode(Node):
         d = self.agent.finish_step()
         self._prepare_peers()
         self.outputs.publish(k, d)
-        self.goal_pub.publish(convert.pose_stamped(d.goal, k, self.dt, self.frame_id))
         stats = f.stats
-        self.status_pub.publish(RobotStatus(
+        self._publish_status(RobotStatus(
             header=convert.header(k, self.dt, self.frame_id), state=RobotStatus.STATE_STEP_DONE,
             robot_id=self.robot_id, step=k, goal=Point(x=float(d.goal[0]), y=float(d.goal[1])),
             power_weight=float(d.power_weight), messages_received=self._received.pop(k, 0),
@@ -506,6 +514,12 @@ class RobotNode(Node):
             rejoins=int(stats.get("rejoins", 0)),
             revived_peers=int(stats.get("revived_peers", 0)),
             **self.outputs.status_fields()))
+
+    def _publish_status(self, msg: RobotStatus) -> None:
+        """A status on ``/team/status``, and on this robot's ``status`` if it is watched."""
+        data = serialize_message(msg)
+        self.team_status_pub.publish(data)
+        publish_watched(self.status_pub, data)
 
     # ---------------------------------------------------------------- transport
     def _send(self, envelopes: list[Envelope]) -> None:

@@ -19,6 +19,15 @@ Health goes to ROS' standard ``/diagnostics`` (absolute, outside every namespace
 world, each robot and the recorder publish a ``DiagnosticArray`` there once per wall
 second (:mod:`phd_swarm.nodes.diagnostics`).
 
+Team topics carry what the observers (world, monitor, recorder) read of every robot, so that
+each holds a few readers whatever the team size (:mod:`phd_swarm.nodes.bundle`): robots
+write their statuses on ``/team/status`` and the rest of a step's outputs as one
+``MessageBundle`` on ``/team/outputs``; the world writes the step's poses and measurement
+sets as one bundle on ``/world/outputs``. Each message keeps its per-robot topic name in the
+bundle (:attr:`TopicSpec.via` names the team topic that carries it) and the recorder logs it
+under that name. The per-robot topics themselves are written for whoever reads them: the
+robots read their poses and scans there, a person or RViz2 a robot's outputs.
+
 A robot's other topics are those its system's parts declare (:mod:`phd_swarm.core.outputs`:
 :func:`declared_outputs`, :func:`robot_topics`), so a run subscribes to no topic its robots
 do not write.
@@ -47,6 +56,14 @@ MONITOR_ESTIMATES = "/monitor/estimates"
 MONITOR_DENSITY = "/monitor/density"
 MONITOR_DENSITY_GRID = "/monitor/density_grid"
 MONITOR_MARKERS = "/monitor/markers"
+TEAM_STATUS = "/team/status"
+TEAM_OUTPUTS = "/team/outputs"
+WORLD_OUTPUTS = "/world/outputs"
+#: The team topics that carry per-robot topics to the observers; a log holds what they
+#: carry under the per-robot names, not them (:mod:`phd_swarm.nodes.team_routes`).
+TEAM_TRANSPORT = (WORLD_OUTPUTS, TEAM_STATUS, TEAM_OUTPUTS)
+#: The type of ``/team/outputs`` and ``/world/outputs`` (:mod:`phd_swarm.nodes.bundle`).
+BUNDLE_TYPE = "phd_swarm_msgs/msg/MessageBundle"
 #: Health of the world, each robot and the recorder (ROS' standard diagnostics topic).
 DIAGNOSTICS = "/diagnostics"
 
@@ -68,7 +85,8 @@ class TopicSpec:
     """One topic: absolute name, ROS type (``pkg/msg/Type``), QoS profile name, who writes it.
 
     ``qos`` names a profile of :mod:`phd_swarm.nodes.qos`; ``rate`` says how often it is
-    written (for docs/topics.md).
+    written (for docs/topics.md); ``via`` is the team topic that carries a per-robot
+    topic's messages to the observers, or "" (:func:`team_topic`).
     """
 
     name: str
@@ -76,6 +94,7 @@ class TopicSpec:
     qos: str
     publisher: str
     rate: str
+    via: str = ""
 
 
 def robot_namespace(robot_id: int) -> str:
@@ -100,6 +119,18 @@ ROBOT_TOPICS = {
     "inbox": ("phd_swarm_msgs/msg/InboxMessage", "INBOX", "peers",
               "per tick with protocol traffic, one per contact"),
 }
+
+def team_topic(relative: str, writer: str) -> str:
+    """The team topic that carries a robot's topic ``relative`` (written by ``writer``).
+
+    ``status`` travels on :data:`TEAM_STATUS`, the world's per-robot topics on
+    :data:`WORLD_OUTPUTS`, a robot's other outputs on :data:`TEAM_OUTPUTS`; the inbox on
+    none (only its robot reads it).
+    """
+    if relative == "status":
+        return TEAM_STATUS
+    return {"world": WORLD_OUTPUTS, "robot": TEAM_OUTPUTS}.get(writer, "")
+
 
 def declared_outputs(system: Any, publish_density: bool = True,
                      publish_markers: bool = True) -> tuple[Output, ...]:
@@ -136,6 +167,12 @@ TEAM_TOPICS = {
                    "once per step, and once after the last"),
     WORLD_MARKERS: ("visualization_msgs/msg/MarkerArray", "OBSERVATION", "world",
                     "once per step"),
+    WORLD_OUTPUTS: (BUNDLE_TYPE, "STEP", "world",
+                    "once per step: every robot's pose and measurement set"),
+    TEAM_STATUS: ("phd_swarm_msgs/msg/RobotStatus", "STEP", "robots",
+                  "once per robot and step, and at READY / while WORKING"),
+    TEAM_OUTPUTS: (BUNDLE_TYPE, "STEP", "robots",
+                   "once per robot and step: its goal, estimates and system's outputs"),
     MONITOR_METRICS: ("phd_swarm_msgs/msg/TeamMetrics", "STEP", "monitor", "once per step"),
     MONITOR_ESTIMATES: ("phd_swarm_msgs/msg/TargetSet", "STEP", "monitor",
                         "once per step"),
@@ -156,5 +193,6 @@ def run_topics(robot_ids: list[int] | range, outputs: Iterable[Output] = ()
     out = [TopicSpec(name, *spec) for name, spec in TEAM_TOPICS.items()]
     table = robot_topics(outputs)
     for rid in robot_ids:
-        out.extend(TopicSpec(robot_topic(rid, rel), *spec) for rel, spec in table.items())
+        out.extend(TopicSpec(robot_topic(rid, rel), *spec, via=team_topic(rel, spec[2]))
+                   for rel, spec in table.items())
     return out

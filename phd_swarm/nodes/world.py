@@ -4,8 +4,9 @@ A thin adapter over :class:`phd_swarm.sim.world.World` (targets of Dames Sec. IV
 Sec. 4, holonomic robots with a speed limit, Chen eq. 3; the sensor of Dames eq. 9-11).
 Per step k it publishes ``/clock`` (t = k dt), the team state (``/world/robots``), the truth
 (``/world/truth``), each live robot's pose and measurement set Z_r^k
-(``/robot_<r>/pose``, ``/robot_<r>/measurements``) and markers, then collects each robot's
-``STEP_DONE`` status (goal g_r) from ``/robot_<r>/status``:
+(``/robot_<r>/pose``, ``/robot_<r>/measurements``; the observers get them all as one
+bundle on ``/world/outputs``, :mod:`phd_swarm.nodes.bundle`) and markers, then collects each
+robot's ``STEP_DONE`` status (goal g_r) from ``/team/status``, one reader for the team:
 
 - lockstep (default): step k+1 starts when every live robot has reported step k. Liveness
   is apart from progress: a robot working on a step, or waiting for the next one's inputs,
@@ -47,11 +48,12 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock as ClockMsg
 from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import SHARED, WORLD
-from phd_swarm.nodes import convert
+from phd_swarm.nodes import bundle, convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.diagnostics import WorldHealth, world_status
@@ -60,7 +62,13 @@ from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import declare, declare_scenario
 from phd_swarm.sim.world import World
-from phd_swarm_msgs.msg import MeasurementSet, RobotStatus, TargetSet, TeamState
+from phd_swarm_msgs.msg import (
+    MeasurementSet,
+    MessageBundle,
+    RobotStatus,
+    TargetSet,
+    TeamState,
+)
 
 #: Exit code of a world whose team never became ready (nothing was run).
 EXIT_NOT_READY = 3
@@ -126,9 +134,13 @@ class WorldNode(Node):
                                                    publisher_qos("STEP")) for r in self.ids}
         self.pose_pubs = {r: self.create_publisher(PoseStamped, T.robot_topic(r, "pose"),
                                                    publisher_qos("STEP")) for r in self.ids}
-        for r in self.ids:
-            self.create_subscription(RobotStatus, T.robot_topic(r, "status"),
-                                     self._make_status_callback(r), subscription_qos("STEP"))
+        self.outputs_pub = self.create_publisher(MessageBundle, T.WORLD_OUTPUTS,
+                                                 publisher_qos("STEP"))
+        self._topics = {r: (T.robot_topic(r, "pose"), T.robot_topic(r, "measurements"))
+                        for r in self.ids}
+        self._known = frozenset(self.ids)
+        self.create_subscription(RobotStatus, T.TEAM_STATUS, self._on_team_status,
+                                 subscription_qos("STEP"))
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(0.05, self._on_watchdog, clock=steady)
         if self.params["mode"] == "realtime":
@@ -173,14 +185,22 @@ class WorldNode(Node):
         self.truth_pub.publish(convert.target_set(convert.TEAM_ID, k, ids, truth, len(ids),
                                                   self.dt, self.frame_id))
         positions = w.robot_positions
+        pieces = []
         for r in self.ids:
-            self.pose_pubs[r].publish(convert.pose_stamped(positions[r], k, self.dt,
-                                                           self.frame_id))
+            pose = serialize_message(convert.pose_stamped(positions[r], k, self.dt,
+                                                          self.frame_id))
+            self.pose_pubs[r].publish(pose)
+            pieces.append((self._topics[r][0], pose))
+        h = convert.header(k, self.dt, self.frame_id)
         for r, z in w.scans().items():
-            h = convert.header(k, self.dt, self.frame_id)
-            self.scan_pubs[r].publish(MeasurementSet(
+            scan = serialize_message(MeasurementSet(
                 header=h, robot_id=r, step=k, sensor_position=convert.points(positions[r])[0],
                 measurements=convert.points(z)))
+            self.scan_pubs[r].publish(scan)
+            pieces.append((self._topics[r][1], scan))
+        # The observers' copy: one sample for the whole team (bundle.py).
+        self.outputs_pub.publish(bundle.pack_cdr(h.stamp.sec, h.stamp.nanosec, self.frame_id,
+                                                 bundle.WORLD, k, pieces))
         if self.params["publish_markers"]:
             self.markers_pub.publish(world_markers_cdr(
                 convert.stamp(k, self.dt), self.frame_id, positions, w.alive,
@@ -190,15 +210,14 @@ class WorldNode(Node):
         self._phase_since = time.monotonic()
 
     # --------------------------------------------------------------- statuses
-    def _make_status_callback(self, topic_id: int):
-        def callback(msg: RobotStatus) -> None:
-            self._on_status(topic_id, msg)
-        return callback
+    def _on_team_status(self, msg: RobotStatus) -> None:
+        if msg.robot_id not in self._known:
+            self._reject(f"status of robot {msg.robot_id} on {T.TEAM_STATUS}: no robot of "
+                         "this run")
+            return
+        self._on_status(msg.robot_id, msg)
 
     def _on_status(self, topic_id: int, msg: RobotStatus) -> None:
-        if msg.robot_id != topic_id:
-            self._reject(f"status of robot {msg.robot_id} on robot {topic_id}'s topic")
-            return
         if msg.state not in (RobotStatus.STATE_READY, RobotStatus.STATE_STEP_DONE,
                              RobotStatus.STATE_WORKING):
             self._reject(f"robot {topic_id}: unknown status state {msg.state}")

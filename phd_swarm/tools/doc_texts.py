@@ -45,6 +45,13 @@ DESCRIPTIONS: dict[str, str] = {
                         "(`diagnostic_msgs`: state, step lag, contacts, timeouts, rejected "
                         "messages, dead peers; steps and lag; messages written and gaps) at "
                         "OK / WARN / ERROR (thresholds in docs/ros.md).",
+    topics.WORLD_OUTPUTS: "The step's poses and measurement sets of every robot, each "
+                          "under its per-robot topic name, as one bundle for the "
+                          "observers (see below).",
+    topics.TEAM_STATUS: "Every robot's status (as `/robot_<id>/status`), for the world's "
+                        "lockstep hand-shake and the observers.",
+    topics.TEAM_OUTPUTS: "A robot's goal, estimates and declared outputs of a step, each "
+                         "under its per-robot topic name, as one bundle for the observers.",
     ROBOT_PATTERN.format("measurements"): "Measurement set Z_r^k and sensor position q^k "
                                           "from the simulated sensor; starts the robot's "
                                           "step.",
@@ -238,9 +245,21 @@ daemon (`ros2 daemon stop`): it keeps the settings it was started with.
 
 {team_table}
 
+`/team/status`, `/team/outputs` and `/world/outputs` carry what the observers (world,
+monitor, recorder) read of every robot, so that each observer holds a few readers whatever
+the team size: the statuses on one topic, each robot's other outputs of a step (goal,
+estimates, its system's outputs below) as one `MessageBundle`, and the world's poses and
+measurement sets of a step as one bundle. A bundle keeps each message's own topic name and
+CDR bytes (`phd_swarm.nodes.bundle.unpack_cdr` cuts one); the recorder writes each message
+under that name, so a log holds the per-robot topics, not these three. Jazzy has no keyed
+topics: the key is the sender in the message ([decisions](decisions.md), "Team topics").
+
 ## Per-robot topics
 
-Each in the robot's namespace `/robot_<id>`.
+Each in the robot's namespace `/robot_<id>`. The robot reads its `measurements`, `pose`
+and `inbox` here. What a robot writes is written here too whenever a reader is matched (a
+person with `ros2 topic echo`, RViz2, the viewer): such a reader sees the steps from when
+it matched on; the observers get every step from the team topics.
 
 {robot_table}
 

@@ -29,7 +29,7 @@ from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.logs.mcap_log import LogError, open_log
 from phd_swarm.nodes import completeness
 from phd_swarm.nodes import topics as T
-from phd_swarm.nodes.recorder import status_state
+from phd_swarm.nodes.team_routes import status_state
 from phd_swarm.tools.run_log import config_from_log, deserialize
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 

@@ -149,7 +149,7 @@ class Replayer:
     def __init__(self, index: LogIndex, topics: Iterable[str], context: Any = None) -> None:
         import rclpy
 
-        from phd_swarm.nodes.recorder import message_class
+        from phd_swarm.nodes.record_topics import message_class
 
         #: Problems met while creating the publishers, one line each.
         self.warnings: list[str] = []

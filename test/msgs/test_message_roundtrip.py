@@ -18,6 +18,7 @@ from phd_swarm_msgs.msg import (
     GaussianMixture,
     InboxMessage,
     MeasurementSet,
+    MessageBundle,
     ParticleTransfer,
     RewardSet,
     RobotState,
@@ -89,6 +90,9 @@ EXAMPLES = [
              plan_members=[0, 2]),
     InboxMessage(sender=3, kinds=["state", "cell"], offsets=[0, 4, 9],
                  data=[0, 1, 0, 0, 7, 0, 1, 0, 0]),
+    MessageBundle(header=_header(18), sender=-1, step=18,
+                  topics=["/robot_0/pose", "/robot_1/pose"], offsets=[0, 4, 9],
+                  data=[0, 1, 0, 0, 7, 0, 1, 0, 0]),
 ]
 
 

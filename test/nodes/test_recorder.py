@@ -32,15 +32,10 @@ from phd_swarm.config import load_run_config
 from phd_swarm.logs.mcap_log import open_log, read_messages, read_metadata, summarize
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
-from phd_swarm.nodes.recorder import (
-    Recorder,
-    accepts,
-    adapted_qos,
-    starts_with_stamp,
-    status_state,
-    table_spec,
-)
+from phd_swarm.nodes.record_topics import accepts, adapted_qos, starts_with_stamp, table_spec
+from phd_swarm.nodes.recorder import Recorder
 from phd_swarm.nodes.ros_params import ParameterError
+from phd_swarm.nodes.team_routes import status_state
 from phd_swarm_msgs.msg import RobotStatus, TargetSet, TeamState
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -122,7 +117,10 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
     # The protocol inboxes only when asked (record_inboxes); of the declared outputs only
     # the system's (Dames: density, density_grid and cell), so no reader waits on a topic
     # nobody writes.
-    assert len(rec.topics) == len(T.TEAM_TOPICS) + len(T.ROBOT_TOPICS) - 1 + 3
+    # The team topics carry robot topics (bundle.py): the log holds those, not them.
+    assert len(rec.topics) == len(T.TEAM_TOPICS) - len(T.TEAM_TRANSPORT) \
+        + len(T.ROBOT_TOPICS) - 1 + 3
+    assert not set(T.TEAM_TRANSPORT) & set(rec.topics)
     assert not any(t.endswith("/inbox") for t in rec.topics)
     assert {"/robot_0/density", "/robot_0/density_grid", "/robot_0/cell",
             T.DIAGNOSTICS} <= set(rec.topics)
@@ -130,8 +128,7 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
                    if t.startswith("/robot_"))
     talker = ros.node("talker")
     truth = talker.create_publisher(TargetSet, T.WORLD_TRUTH, publisher_qos("STEP"))
-    status = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"),
-                                     publisher_qos("STEP"))
+    status = talker.create_publisher(RobotStatus, T.TEAM_STATUS, publisher_qos("STEP"))
     clock = talker.create_publisher(Clock, T.CLOCK, publisher_qos("CLOCK"))
     _matched(ros, [truth, status, clock])
 
@@ -179,9 +176,7 @@ def test_records_the_run_topics_of_a_config_and_its_metadata(ros, tmp_path):
 @pytest.mark.ros
 def test_the_truth_is_subscribed_once_every_world_writer_matched(ros, tmp_path):
     """The world counts the recorder by its truth subscription: that comes last."""
-    from geometry_msgs.msg import PoseStamped
-
-    from phd_swarm_msgs.msg import MeasurementSet
+    from phd_swarm_msgs.msg import MessageBundle
 
     rec = _recorder(ros, output=str(tmp_path / "run.mcap"),
                     params_file=str(_config(tmp_path, robots=2)), discover=False)
@@ -189,20 +184,19 @@ def test_the_truth_is_subscribed_once_every_world_writer_matched(ros, tmp_path):
     world = ros.node("world")
     types = {"rosgraph_msgs/msg/Clock": Clock, "phd_swarm_msgs/msg/TeamState": TeamState,
              "visualization_msgs/msg/MarkerArray": MarkerArray,
-             "phd_swarm_msgs/msg/MeasurementSet": MeasurementSet,
-             "geometry_msgs/msg/PoseStamped": PoseStamped}
+             T.BUNDLE_TYPE: MessageBundle}
+    # The robots' poses and measurement sets reach the recorder inside /world/outputs.
     specs = [t for t in T.run_topics(range(2)) if t.publisher == "world"
-             and t.name != T.WORLD_TRUTH]
+             and t.name != T.WORLD_TRUTH and not t.via]
     assert {t.name for t in specs} == {"/clock", "/world/robots", "/world/markers",
-                                       "/robot_0/measurements", "/robot_0/pose",
-                                       "/robot_1/measurements", "/robot_1/pose"}
-    last = next(t for t in specs if t.name == "/robot_1/pose")
+                                       T.WORLD_OUTPUTS}
+    last = next(t for t in specs if t.name == T.WORLD_OUTPUTS)
     pubs = [world.create_publisher(types[t.type], t.name, publisher_qos(t.qos))
             for t in specs if t is not last]
     _matched(ros, pubs)
     ros.spin_until(lambda: False, timeout=1.0)
     assert T.WORLD_TRUTH not in rec.topics, "subscribed before the last writer matched"
-    world.create_publisher(PoseStamped, last.name, publisher_qos(last.qos))
+    world.create_publisher(MessageBundle, last.name, publisher_qos(last.qos))
     assert ros.spin_until(lambda: T.WORLD_TRUTH in rec.topics, timeout=20.0)
     rec.close()
 
@@ -276,7 +270,7 @@ def _publish_statuses(ros, n: int):
     talker = ros.node("talker")
     deep = QoSProfile(depth=n, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    pub = talker.create_publisher(RobotStatus, T.robot_topic(0, "status"), deep)
+    pub = talker.create_publisher(RobotStatus, T.TEAM_STATUS, deep)
     _matched(ros, [pub], timeout=30.0)
     for k in range(n):
         pub.publish(_status(k))
@@ -373,8 +367,7 @@ def test_completeness_names_the_missing_steps_and_is_stored_in_the_log(ros, tmp_
                     wait_for_world=False)
     talker = ros.node("talker")
     pubs = {name: talker.create_publisher(typ, name, publisher_qos("STEP")) for name, typ in [
-        (T.WORLD_ROBOTS, TeamState), (T.robot_topic(0, "status"), RobotStatus),
-        (T.robot_topic(1, "status"), RobotStatus)]}
+        (T.WORLD_ROBOTS, TeamState), (T.TEAM_STATUS, RobotStatus)]}
     _matched(ros, list(pubs.values()))
     dt = load_run_config(cfg).scenario.dt
     steps = 4
@@ -389,10 +382,10 @@ def test_completeness_names_the_missing_steps_and_is_stored_in_the_log(ros, tmp_
                                                positions=[Point(), Point()], alive=alive))
         for r in (0, 1):
             if k == 0:
-                pubs[T.robot_topic(r, "status")].publish(RobotStatus(
+                pubs[T.TEAM_STATUS].publish(RobotStatus(
                     header=stamp(0), state=RobotStatus.STATE_READY, robot_id=r))
             if k < steps and alive[r] and (r, k) != (0, 2) and (r, k) != (1, 1):
-                pubs[T.robot_topic(r, "status")].publish(RobotStatus(
+                pubs[T.TEAM_STATUS].publish(RobotStatus(
                     header=stamp(k), state=RobotStatus.STATE_STEP_DONE, robot_id=r, step=k))
     assert ros.spin_until(lambda: rec.message_count == 5 + 2 + 3 + 1, timeout=10.0), \
         rec.message_count

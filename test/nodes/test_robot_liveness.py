@@ -27,7 +27,12 @@ class _LatePublisher:
         self.timers: list[threading.Timer] = []
 
     def publish(self, msg) -> None:
-        if msg.step != HELD_STEP:
+        # The world publishes CDR (it keeps the bytes for its bundle, bundle.py).
+        from rclpy.serialization import deserialize_message
+
+        from phd_swarm_msgs.msg import MeasurementSet
+
+        if deserialize_message(msg, MeasurementSet).step != HELD_STEP:
             self.pub.publish(msg)
             return
         timer = threading.Timer(HELD_FOR, self.pub.publish, args=(msg,))

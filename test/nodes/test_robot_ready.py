@@ -16,7 +16,8 @@ def test_a_robot_without_its_second_observer_names_what_is_missing(tmp_path, mon
     logged: list[str] = []
     scenario = small_static_scenario(robots=2, steps=4)
     with InProcessRos(executor="events") as ros:
-        # Two observers expected, only the monitor runs: no recorder reads status or density.
+        # Two observers expected, only the monitor runs: no recorder reads the
+        # team's statuses and outputs.
         _, _, robots = start_swarm(ros, tmp_path, scenario, observers=2,
                                    robot={"ready_timeout": 3.0})
         for r in robots:
@@ -27,8 +28,8 @@ def test_a_robot_without_its_second_observer_names_what_is_missing(tmp_path, mon
     gave_up = [m for m in logged if "not matched within 3.0 s" in m]
     assert waiting and len(gave_up) == 2, logged
     for text in (waiting[0], *gave_up):
-        assert "status: 2 of 3 readers (world and observers)" in text, text
-        assert "density: fewer than 2 observers" in text, text
+        assert "/team/status: 2 of 3 readers (world and observers)" in text, text
+        assert "/team/outputs: fewer than 2 observers" in text, text
         assert "inboxes" not in text, text      # the two robots found each other's inbox
 
 

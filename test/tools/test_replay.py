@@ -173,7 +173,7 @@ def test_topics_start_and_end_select_a_log_time_window(recorded_run, capsys):
 
 def _subscribe(node, log: Path, topics: dict[str, QoSProfile]):
     """Raw subscriptions to ``topics`` (topic -> reader QoS); returns (bytes, arrival times)."""
-    from phd_swarm.nodes.recorder import message_class
+    from phd_swarm.nodes.record_topics import message_class
 
     types = {t: s.ros_type for t, s in summarize(log).topics.items()}
     got: dict[str, list[bytes]] = {t: [] for t in topics}
