@@ -73,6 +73,11 @@ from phd_swarm_msgs.msg import (
 #: Exit code of a world whose team never became ready (nothing was run).
 EXIT_NOT_READY = 3
 
+#: The end of the world's log line when the team is ready and step 0 begins, and the start
+#: of its line at the end (run_swarm times the stepping between them).
+READY_LINE = "observers ready after"
+DONE_LINE = "world: done"
+
 #: Wall seconds between start-up progress lines.
 READY_LOG_PERIOD = 5.0
 
@@ -278,7 +283,7 @@ class WorldNode(Node):
         self.clock_pub.publish(ClockMsg(clock=convert.stamp(k, self.dt)))
         self._publish_team(k)
         wall = time.monotonic() - self._started_wall
-        self.get_logger().info(f"world: done, {k} steps in {wall:.1f} s wall "
+        self.get_logger().info(f"{DONE_LINE}, {k} steps in {wall:.1f} s wall "
                                f"({k * self.dt / max(wall, 1e-9):.2f} x real time); dead "
                                f"robots: {sorted(self.dead) or 'none'}")
         self._phase = "lingering"
@@ -339,8 +344,8 @@ class WorldNode(Node):
             self._ready_progress = (count, now)
         if set(self.ids) <= self.ready and observers >= need:
             self._check_duplicates()
-            self.get_logger().info(f"world: all {len(self.ids)} robots and {need} observers "
-                                   f"ready after {now - self._phase_since:.1f} s")
+            self.get_logger().info(f"world: all {len(self.ids)} robots and {need} "
+                                   f"{READY_LINE} {now - self._phase_since:.1f} s")
             self._started_wall = now
             self._publish_step()
             return

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import IO
 
@@ -56,17 +57,18 @@ def clean_fastdds_shm() -> None:
                    stderr=subprocess.DEVNULL, timeout=30, check=False)
 
 
-def _pump(stream: IO[str], log: IO[str], echo: bool, up: tuple[str, threading.Event] | None
+def _pump(stream: IO[str], log: IO[str], echo: bool, marks: list[tuple[str, threading.Event]]
           ) -> None:
     """Copy a child's output to its log; echo progress lines and errors to the terminal.
 
-    ``up``: (marker, event): the event is set at the first line holding the marker.
+    ``marks``: (marker, event) pairs: an event is set at the first line holding its marker.
     """
     for line in stream:
         log.write(line)
         log.flush()
-        if up is not None and not up[1].is_set() and up[0] in line:
-            up[1].set()
+        for marker, event in marks:
+            if not event.is_set() and marker in line:
+                event.set()
         if echo and ("steps/s" in line or line.startswith(("[ERROR]", "error:"))
                      or "world: done" in line or "waiting for the team" in line):
             print(line.rstrip().split("]: ", 1)[-1], flush=True)
@@ -93,7 +95,8 @@ class Swarm:
 
     def start(self, name: str, module: str, ros_args: list[str], extra: list[str] = (),
               echo: bool = False, up_marker: str | None = None, nice: int = 0,
-              env: dict[str, str] | None = None, prefix: tuple[str, ...] = ()
+              env: dict[str, str] | None = None, prefix: tuple[str, ...] = (),
+              marks: Mapping[str, threading.Event] | None = None
               ) -> subprocess.Popen | ForkedProcess:
         """Start ``python -m module extra --ros-args ros_args`` as child ``name``.
 
@@ -102,6 +105,7 @@ class Swarm:
         ``prefix``).
 
         ``up_marker``: text of the log line that says the child is up (:meth:`wait_up`).
+        ``marks``: more such texts, each with the event set at the first line holding it.
         ``nice``: the child's niceness (:func:`lower_priority`). ``env``: variables added to
         the run's environment for this child. ``prefix``: words put before the command to
         run it on another host (``ip netns exec NS``, ``--hosts``).
@@ -125,10 +129,11 @@ class Swarm:
         if nice:
             lower_priority(proc.pid, nice)
         log = open(self.run_dir / "logs" / f"{name}.log", "w")  # noqa: SIM115 (closed by EOF)
-        up = None
+        found = list((marks or {}).items())
         if up_marker is not None:
-            up = (up_marker, self._up.setdefault(name, threading.Event()))
-        t = threading.Thread(target=_pump, args=(proc.stdout, log, echo and not self.quiet, up),
+            found.append((up_marker, self._up.setdefault(name, threading.Event())))
+        t = threading.Thread(target=_pump,
+                             args=(proc.stdout, log, echo and not self.quiet, found),
                              daemon=True)
         t.start()
         self._threads.append(t)
@@ -250,3 +255,53 @@ def _signal_group(proc: subprocess.Popen, sig: int) -> None:
         os.killpg(proc.pid, sig)
     except (ProcessLookupError, PermissionError):
         pass
+
+
+class Stepping:
+    """When the world was stepping, and what each child's CPU was then.
+
+    The world logs a line when its team is ready (step 0 begins) and one when it is done;
+    :meth:`marks` gives the events :meth:`Swarm.start` sets at those lines, and :meth:`note`,
+    called at every sample of the children's CPU (``Swarm.cpu``), takes the CPU at each.
+
+    Parameters
+    ----------
+    started : float
+        ``time.monotonic()`` when the run started (before its first child).
+    ready_line, done_line : str
+        Texts of the world's two lines.
+    """
+
+    def __init__(self, started: float, ready_line: str, done_line: str) -> None:
+        self.started = started
+        self._lines = {ready_line: threading.Event(), done_line: threading.Event()}
+        self._ready, self._done = self._lines.values()
+        #: ``time.monotonic()`` at which the team was seen ready, or None.
+        self.ready_at: float | None = None
+        self._at_ready: dict[str, float] = {}
+        self._at_done: dict[str, float] | None = None
+
+    def marks(self) -> dict[str, threading.Event]:
+        """The world's lines to watch for (:meth:`Swarm.start`'s ``marks``)."""
+        return dict(self._lines)
+
+    def note(self, cpu: Mapping[str, float]) -> None:
+        """Take the children's CPU ``cpu`` [s] if the world just became ready or done."""
+        if self.ready_at is None and self._ready.is_set():
+            self.ready_at = time.monotonic()
+            self._at_ready = dict(cpu)
+        if self.ready_at is not None and self._at_done is None and self._done.is_set():
+            self._at_done = dict(cpu)
+
+    def figures(self, cpu: Mapping[str, float]) -> dict[str, object]:
+        """``startup_s`` (run start to the team ready) and ``cpu_s_stepping`` per child.
+
+        The CPU each child used from the ready line to the done line (to ``cpu``, the last
+        sample, if the world never said it was done). Empty if the team was never ready.
+        """
+        if self.ready_at is None:
+            return {}
+        end = self._at_done if self._at_done is not None else cpu
+        return {"startup_s": round(self.ready_at - self.started, 2),
+                "cpu_s_stepping": {k: round(v - self._at_ready.get(k, 0.0), 2)
+                                   for k, v in sorted(end.items())}}

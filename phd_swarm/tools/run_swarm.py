@@ -42,7 +42,7 @@ from typing import Any
 from phd_swarm.config import RunConfig
 from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError
-from phd_swarm.nodes.world import EXIT_NOT_READY
+from phd_swarm.nodes.world import DONE_LINE, EXIT_NOT_READY, READY_LINE
 from phd_swarm.tools import view_run
 from phd_swarm.tools.dds import (
     DDS_PROFILE,
@@ -68,6 +68,7 @@ from phd_swarm.tools.launch_plan import (
     swarm_plan,
 )
 from phd_swarm.tools.processes import (
+    Stepping,
     Swarm,
     process_cpu_seconds,
     stop_process_group,
@@ -100,7 +101,8 @@ SERVER_UP_TIMEOUT = 60.0
 
 #: Wall-clock fields of summary.json: they differ between two runs of the same seed.
 WALL_CLOCK_FIELDS = ("wall_duration_s", "stepping_wall_s", "real_time_factor", "run_dir",
-                     "cpu_s", "cpu_s_per_robot", "peak_memory_mb")
+                     "cpu_s", "cpu_s_per_robot", "peak_memory_mb", "startup_s",
+                     "cpu_s_stepping")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -205,6 +207,7 @@ def run(opts: argparse.Namespace) -> int:
     # Its children get ``env`` as it is when each starts.
     swarm = Swarm(run_dir, env, opts.quiet, fork=not opts.no_fork_server)
     started = time.monotonic()
+    stepping = Stepping(started, READY_LINE, DONE_LINE)
     interrupted = False
     code = 0
     server = None
@@ -264,12 +267,14 @@ def run(opts: argparse.Namespace) -> int:
         _start_robots(swarm, list(plan.robots), opts.start_window)
         world = swarm.start(plan.world.name, plan.world.module, plan.world.ros_args(),
                             extra=plan.world.arguments, echo=plan.world.echo,
-                            env=dict(plan.world.env), prefix=plan.world.prefix)
+                            env=dict(plan.world.env), prefix=plan.world.prefix,
+                            marks=stepping.marks())
         while world.poll() is None:
             time.sleep(0.2)
             for n in swarm.procs:
                 swarm.sample(n)
             swarm.sample_fork_server()
+            stepping.note(swarm.cpu)
             monitor = swarm.procs["monitor"]
             if monitor.poll() is not None and monitor.returncode != 0:
                 raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
@@ -319,7 +324,8 @@ def run(opts: argparse.Namespace) -> int:
         if view_server is not None:
             # The view's server is part of what --view costs (docs/benchmarks.md).
             swarm.cpu["view_server"] = process_cpu_seconds(view_server.pid)
-        code = _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory) or code
+        code = _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory,
+                       stepping.figures(swarm.cpu)) or code
     if view_server is not None:
         if not interrupted and code != EXIT_NOT_READY:
             view_run.hold(view_server, PROG, True if opts.view_hold else None)
@@ -435,7 +441,8 @@ def _start_discovery_server(run_dir: Path, env: dict[str, str], hosts: HostLayou
 
 
 def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
-            cpu: dict[str, float], memory: dict[str, float]) -> int:
+            cpu: dict[str, float], memory: dict[str, float],
+            stepping_figures: dict[str, object]) -> int:
     path = run_dir / "summary.json"
     if not path.exists():
         print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
@@ -452,7 +459,8 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
                                          if stepping else None),
                     "cpu_s": {k: round(v, 2) for k, v in sorted(cpu.items())},
                     "cpu_s_per_robot": robots_cpu / s.robots,
-                    "peak_memory_mb": {k: round(v, 1) for k, v in sorted(memory.items())}})
+                    "peak_memory_mb": {k: round(v, 1) for k, v in sorted(memory.items())},
+                    **stepping_figures})
     path.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"run_swarm: {summary['steps']}/{s.steps} steps, {summary['sim_duration_s']:g} s sim "
           f"in {stepping:.1f} s wall ({summary['real_time_factor'] or 0:.2f} x real time; "

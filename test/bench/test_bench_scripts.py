@@ -188,13 +188,20 @@ def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
     for r in rows:
         assert r["robots"] == 4 and r["steps"] == 10 and r["dead_robots"] == []
         assert r["log_complete"] is True and r["cpu_ms_per_robot_step"] > 0
-        assert 20 < r["peak_memory_mb_per_process"] < 2000
+        assert 20 < r["peak_memory_mb_robot_process"] <= r["peak_memory_mb_per_process"] < 2000
+        # Start-up and the CPU while stepping, robots and observers apart.
+        assert r["start"] == "spread" and 0 < r["startup_s"] < r["total_wall_s"]
+        assert r["robot_cpu_ms_per_robot_step_stepping"] > 0
+        obs = r["observers_cpu_ms_per_step_stepping"]
+        assert set(obs) == {"world", "monitor", "recorder"} and all(v > 0 for v in obs.values())
     assert "complete" in stdout
 
 
 def test_bench_swarm_rejects_an_unknown_layout():
     result = _bench("swarm", "--layouts", "processes,clusters", timeout=120)
     assert result.returncode == 2 and "clusters" in result.stderr
+    result = _bench("swarm", "--starts", "spread,diagonal", timeout=120)
+    assert result.returncode == 2 and "diagonal" in result.stderr
 
 
 @pytest.mark.ros

@@ -74,6 +74,13 @@ def test_run_swarm_writes_a_valid_log_and_summary_and_repeats_itself_forked_or_n
     assert summary["seed"] == 3 and summary["scenario"] == "dames_static"
     assert len(summary["ospa_series"]) == STEPS and summary["dead_robots"] == []
     assert 0 < summary["messages_per_robot_per_step"] < 100
+    # Start-up, and each process's CPU while stepping (from the world's ready line to its
+    # done line): part of what it used in all.
+    assert 0 < summary["startup_s"] < summary["wall_duration_s"]
+    stepping = summary["cpu_s_stepping"]
+    assert {"world", "monitor", "recorder", "robot_0"} <= set(stepping)
+    assert all(0 <= stepping[k] <= summary["cpu_s"][k] for k in stepping)
+    assert stepping["world"] > 0
 
     again = json.loads((tmp_path / "b" / "summary.json").read_text())
     assert "fork_server" in summary["cpu_s"] and "fork_server" not in again["cpu_s"]
