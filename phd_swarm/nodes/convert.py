@@ -21,6 +21,9 @@ from __future__ import annotations
 
 import array
 import math
+from collections.abc import Mapping
+from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -195,11 +198,14 @@ def density_grid(owner_id: int, step: int, grid: Grid, bins: np.ndarray,
                        origin_row=r0, width=width, height=height, data=f64(window.ravel()))
 
 
-def add_density(image: np.ndarray, msg: DensityGrid, grid: Grid) -> None:
+def add_density(image: np.ndarray, msg: DensityGrid | Mapping[str, Any], grid: Grid) -> None:
     """Add a ``DensityGrid`` window into the team image (ny, nx).
 
+    ``msg``: the message, or the numpy codec's dict of one (:func:`phd_swarm.nodes.cdr.decode`).
     Raises InvalidMessage if the window does not fit the grid or holds bad numbers.
     """
+    if isinstance(msg, Mapping):
+        msg = SimpleNamespace(**msg)
     ny, nx = grid.shape
     if not (math.isclose(msg.resolution, grid.resolution) and math.isclose(
             msg.x_min, grid.env.xmin) and math.isclose(msg.y_min, grid.env.ymin)):

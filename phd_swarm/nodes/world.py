@@ -4,8 +4,9 @@ A thin adapter over :class:`phd_swarm.sim.world.World` (targets of Dames Sec. IV
 Sec. 4, holonomic robots with a speed limit, Chen eq. 3; the sensor of Dames eq. 9-11).
 Per step k it publishes ``/clock`` (t = k dt), the team state (``/world/robots``), the truth
 (``/world/truth``), each live robot's pose and measurement set Z_r^k
-(``/robot_<r>/pose``, ``/robot_<r>/measurements``; the observers get them all as one
-bundle on ``/world/outputs``, :mod:`phd_swarm.nodes.bundle`) and markers, then collects each
+(``/robot_<r>/pose``, written while a reader is matched, ``/robot_<r>/measurements``; the
+observers get them all as one bundle on ``/world/outputs``, :mod:`phd_swarm.nodes.bundle`)
+and markers, then collects each
 robot's ``STEP_DONE`` status (goal g_r) from ``/team/status``, one reader for the team:
 
 - lockstep (default): step k+1 starts when every live robot has reported step k. Liveness
@@ -194,7 +195,8 @@ class WorldNode(Node):
         for r in self.ids:
             pose = serialize_message(convert.pose_stamped(positions[r], k, self.dt,
                                                           self.frame_id))
-            self.pose_pubs[r].publish(pose)
+            # Nobody in the run reads a robot's pose topic: written while watched.
+            bundle.publish_watched(self.pose_pubs[r], pose)
             pieces.append((self._topics[r][0], pose))
         h = convert.header(k, self.dt, self.frame_id)
         for r, z in w.scans().items():

@@ -256,10 +256,10 @@ topics: the key is the sender in the message ([decisions](decisions.md), "Team t
 
 ## Per-robot topics
 
-Each in the robot's namespace `/robot_<id>`. The robot reads its `measurements`, `pose`
-and `inbox` here. What a robot writes is written here too whenever a reader is matched (a
-person with `ros2 topic echo`, RViz2, the viewer): such a reader sees the steps from when
-it matched on; the observers get every step from the team topics.
+Each in the robot's namespace `/robot_<id>`. The robot reads its `measurements` and
+`inbox` here. What a robot writes, and the world's `pose` of it, is written here whenever a
+reader is matched (a person with `ros2 topic echo`, RViz2, the viewer): such a reader sees
+the steps from when it matched on; the observers get every step from the team topics.
 
 {robot_table}
 

@@ -118,3 +118,22 @@ def test_a_face_of_another_type_or_no_face_is_refused():
     assert load_face(Output("density", "phd_swarm_msgs/msg/DensityGrid",
                             "phd_swarm.nodes.faces.grid_phd:DENSITY", "x")).msg_type \
         is DensityGrid
+
+
+def test_a_window_adds_alike_as_a_message_and_as_the_codecs_dict():
+    """The monitor decodes windows with the numpy codec; the log readers take messages."""
+    from rclpy.serialization import serialize_message
+
+    from phd_swarm.nodes import cdr
+
+    engine = _engine("dames_static", robots=3)
+    grid = engine.scenario.grid
+    msgs = {r: _built(engine, r)["density"] for r in range(3)}
+    dicts = {r: cdr.decode(DensityGrid, serialize_message(m)) for r, m in msgs.items()}
+    errors: list[int] = []
+    as_msgs = add_windows(grid, msgs, lambda rid, exc: errors.append(rid))
+    assert np.array_equal(add_windows(grid, dicts, lambda rid, exc: errors.append(rid)),
+                          as_msgs) and as_msgs.sum() > 0 and errors == []
+    wide = dict(dicts[0], origin_col=grid.shape[1])
+    with pytest.raises(convert.InvalidMessage, match="beyond the grid"):
+        convert.add_density(np.zeros(grid.shape), wide, grid)

@@ -2,8 +2,8 @@
 
 One table of systems (:data:`SYSTEMS`): each runs as ROS nodes in one process, lockstep,
 while a probe records every robot's step outputs: its own (``estimates``, ``goal``) and
-every output its system's parts declare (:mod:`phd_swarm.core.outputs`). The distributed
-engine then runs the same scenario, and after each step:
+every output its system's parts declare (:mod:`phd_swarm.core.outputs`), and the world's
+pose of it. The distributed engine then runs the same scenario, and after each step:
 
 - the same faces build the same declared outputs from the engine's agents: the recorded
   messages must be equal in every field (float64 exact; not the serialised bytes, whose
@@ -112,6 +112,7 @@ def test_the_ros_team_equals_the_engine_output_by_output(tmp_path, system):
         for r in robots:
             for topic, msg_type, qos in (("estimates", TargetSet, "STEP"),
                                          ("goal", PoseStamped, "STEP"),
+                                         ("pose", PoseStamped, "STEP"),
                                          *((o.topic, faces[o.topic].msg_type, o.qos)
                                            for o in outputs)):
                 probe.create_subscription(
@@ -125,7 +126,7 @@ def test_the_ros_team_equals_the_engine_output_by_output(tmp_path, system):
             f"monitor stopped at step {monitor.next_step} of {scenario.steps}")
         assert ros.spin_until(lambda: all(len(by_step) == scenario.steps
                                           for by_step in got.values()), timeout=30.0)
-        assert len(got) == scenario.robots * (len(outputs) + 2)
+        assert len(got) == scenario.robots * (len(outputs) + 3)
         assert world.dead == set() and world.rejected == 0 and monitor.rejected == 0
         assert sum(sum(n.rejections.values()) for n in nodes) == 0
         sent = sum(_sent(n.filter) for n in nodes)
@@ -148,6 +149,10 @@ def test_the_ros_team_equals_the_engine_output_by_output(tmp_path, system):
     compared, found = 0, 0
     for k in range(scenario.steps):
         ids, truth = engine.world.truth()
+        # The world's pose of each robot, written on its topic while watched (this probe).
+        for r in robots:
+            pose = got[(r, "pose")][k].pose.position
+            assert [pose.x, pose.y] == engine.world.robot_positions[r].tolist(), (k, r)
         engine.step()
         for r in robots:
             agent, decision = engine.agents[r], engine.decisions[r]
