@@ -193,7 +193,9 @@ def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
         assert r["start"] == "spread" and 0 < r["startup_s"] < r["total_wall_s"]
         assert r["robot_cpu_ms_per_robot_step_stepping"] > 0
         obs = r["observers_cpu_ms_per_step_stepping"]
-        assert set(obs) == {"world", "monitor", "recorder"} and all(v > 0 for v in obs.values())
+        # /proc counts CPU in 10 ms ticks: over 10 steps the recorder's share may round to 0.
+        assert set(obs) == {"world", "monitor", "recorder"} and all(v >= 0 for v in obs.values())
+        assert sum(obs.values()) > 0
     assert "complete" in stdout
 
 

@@ -124,7 +124,7 @@ class RecordingSwarm:
         RecordingSwarm.last = self
 
     def start(self, name, module, ros_args, extra=(), echo=False, up_marker=None, nice=0,
-              env=None, prefix=()):
+              env=None, prefix=(), marks=None):
         self.started.append((name, module, [*extra, "--ros-args", *ros_args], up_marker,
                              echo, nice, tuple(prefix), dict(env or {})))
         self.procs[name] = _Proc(EXIT_NOT_READY if name == "world" else None)
