@@ -19,6 +19,8 @@
 # `scripts/setup.sh --with-view` also sets up the live view (docs/view.md): the pinned
 # requirements-view.lock (rerun-sdk) into the venv, and Debian's chromium for its tests and
 # screenshots (apt-get, as root; otherwise it says what to install).
+# `scripts/setup.sh --with-fuzz` also installs the fuzz benchmark's atheris (the pinned
+# requirements-fuzz.lock; `scripts/bench.sh fuzz`).
 # `scripts/setup.sh --build-hash` prints the hash of the build inputs and exits.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -56,10 +58,13 @@ if [ "${1:-}" = "--build-hash" ]; then
 fi
 
 WITH_VIEW=0
+WITH_FUZZ=0
 if [ "${1:-}" = "--with-view" ]; then
   WITH_VIEW=1
+elif [ "${1:-}" = "--with-fuzz" ]; then
+  WITH_FUZZ=1
 elif [ $# -gt 0 ]; then
-  echo "usage: $0 [--with-view | --build-hash]" >&2
+  echo "usage: $0 [--with-view | --with-fuzz | --build-hash]" >&2
   exit 2
 fi
 
@@ -168,6 +173,22 @@ if [ "$WITH_VIEW" -eq 1 ]; then
     else
       echo "setup.sh --with-view: no chromium on PATH; the view works in any browser, but" \
            "its tests need one (Debian: sudo apt-get install chromium; or set CHROMIUM)" >&2
+    fi
+  fi
+fi
+if [ "$WITH_FUZZ" -eq 1 ]; then
+  FUZZ_LOCK="$ROOT/requirements-fuzz.lock"
+  if [ "$KIND" = native ]; then
+    if ! python3 -c 'import atheris' 2>/dev/null; then
+      echo "setup.sh --with-fuzz: on a native install, pip install --user -r $FUZZ_LOCK" >&2
+      exit 1
+    fi
+  else
+    fuzz_sum="$(sha256sum "$FUZZ_LOCK" | cut -d' ' -f1)"
+    if [ "$(cat "$VENV/.phd_swarm_fuzz.sha256" 2>/dev/null)" != "$fuzz_sum" ]; then
+      log "installing the fuzz benchmark's atheris (requirements-fuzz.lock)"
+      "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$FUZZ_LOCK"
+      echo "$fuzz_sum" > "$VENV/.phd_swarm_fuzz.sha256"
     fi
   fi
 fi

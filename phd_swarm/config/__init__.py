@@ -321,6 +321,8 @@ def read_yaml(path: str | Path, what: str = "file") -> Any:
         text = path.read_text()
     except OSError as exc:
         raise ValueError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: the {what} is not UTF-8 text (byte {exc.start})") from None
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:

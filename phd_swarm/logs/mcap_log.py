@@ -478,8 +478,16 @@ class LogReader:
                 msg = self._decode(schema, channel, message) if decode else None
                 yield LogRecord(channel.topic, schema.name, message.log_time,
                                 message.publish_time, message.data, msg)
-        except McapError as exc:
-            raise LogError(f"{self.path}: {exc}") from exc
+        except LogError:
+            raise
+        except Exception as exc:  # the mcap library on damaged bytes (fuzzed, issue 40)
+            raise self._damaged(exc) from exc
+
+    def _damaged(self, exc: Exception) -> LogError:
+        """The error for what the mcap library (or struct, zstd, lz4, UTF-8) raised."""
+        if isinstance(exc, McapError):
+            return LogError(f"{self.path}: {exc}")
+        return LogError(f"{self.path}: damaged log ({type(exc).__name__}: {exc})")
 
     def _decode(self, schema: Schema, channel: Channel, message: Message) -> Any:
         try:
@@ -502,8 +510,8 @@ class LogReader:
         try:
             for record in records:
                 out[record.name] = dict(record.metadata)
-        except McapError as exc:
-            raise LogError(f"{self.path}: {exc}") from exc
+        except Exception as exc:  # the mcap library on damaged bytes
+            raise self._damaged(exc) from exc
         return out
 
     def info(self) -> LogInfo:

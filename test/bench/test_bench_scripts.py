@@ -228,3 +228,20 @@ def test_bench_view_quick_measures_the_demo_with_and_without_the_view(tmp_path):
     for r in rows.values():
         assert r["steps_per_s"] > 0 and r["cpu_s"] > 0 and len(r["runs"]) == 1
     assert "browser" in stdout and "drop" in stdout
+
+
+@pytest.mark.slow
+def test_bench_fuzz_quick_runs_each_target_and_reports_executions(tmp_path):
+    stdout, data = _quick_results("fuzz", tmp_path, "--targets", "cdr/RobotState,scan",
+                                  timeout=300)
+    rows = data["results"]
+    assert [r["target"] for r in rows] == ["cdr/RobotState", "scan"]
+    for r in rows:
+        assert r["seconds"] == 5 and r["executions"] > 1000 and r["corpus"] > 0
+        assert r["finding"] is None and r["exit_code"] == 0
+    assert "0 findings" in stdout
+
+
+def test_bench_fuzz_rejects_an_unknown_target():
+    result = _bench("fuzz", "--quick", "--targets", "nothing_like_it", timeout=120)
+    assert result.returncode != 0 and "no target starts with 'nothing_like_it'" in result.stderr

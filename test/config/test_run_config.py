@@ -89,3 +89,12 @@ def test_a_scenario_of_every_target_kind_survives_the_params_file(kind, tmp_path
     s = base.with_overrides(targets=dataclasses.replace(base.targets, kind=kind, **extra))
     assert scenario_from_dict(scenario_to_dict(s)) == s
     RunConfig(s).write_params(tmp_path / "params.yaml")
+
+
+def test_a_config_that_is_not_utf8_is_refused_naming_the_file(tmp_path):
+    """Found by fuzzing (issue 40): it escaped as a bare UnicodeDecodeError."""
+    path = tmp_path / "bad.yaml"
+    path.write_bytes(b"scenario:\n  robots: 3\n  name: \x91\n")
+    with pytest.raises(ValueError, match=rf"{path}: the config file is not UTF-8 text "
+                                         r"\(byte 30\)"):
+        load_run_config(path)

@@ -380,3 +380,21 @@ def test_mcap_that_is_not_a_ros2_cdr_log_raises_log_error(tmp_path):
         w.finish()
     with pytest.raises(LogError, match="not a ROS 2 CDR log: topic /x"):
         open_log(json_in_ros2)
+
+
+@pytest.mark.parametrize("compression", ["none", "zstd"])
+def test_a_damaged_record_is_a_log_error_naming_the_file(tmp_path, compression):
+    """A metadata name that is not UTF-8 (found by fuzzing, issue 40).
+
+    It escaped as the mcap library's UnicodeDecodeError.
+    """
+    path = tmp_path / "run.mcap"
+    with LogWriter(path, compression=compression) as log:
+        log.add_metadata("phd_swarm.run", {"scenario": "dames_static"})
+        log.add_channel("/a", "std_msgs/msg/Header")
+        log.write("/a", serialize_message(_header(1)), T0, T0)
+    data = path.read_bytes()
+    # The record itself, not the metadata index of the summary (which names it too).
+    path.write_bytes(data.replace(b"phd_swarm.run", b"phd_swarm\x8erun", 1))
+    with pytest.raises(LogError, match=rf"{path}: damaged log \(UnicodeDecodeError"):
+        read_metadata(path)
