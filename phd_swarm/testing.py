@@ -7,6 +7,9 @@ even when the test fails (the pattern of rclpy's own ``test_executor.py``).
 ``ChildProcesses`` starts processes with DDS kept on loopback and stops them by PID (the
 whole process group), even on failure, then removes the Fast DDS shared-memory files that
 killed processes leave behind.
+
+``fuzzed_bytes(seeds)`` is the hypothesis strategy of the fuzz tests: valid inputs mutated,
+and random bytes.
 """
 
 from __future__ import annotations
@@ -208,3 +211,42 @@ def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str 
     monitor = ros.add(MonitorNode(keep_images=True, context=ros.context, cli_args=args))
     world_node = ros.add(WorldNode(context=ros.context, cli_args=args))
     return world_node, monitor, robots
+
+
+#: Values a length, count, id or offset word is set to by :func:`fuzzed_bytes`.
+EDGE_WORDS = (0, 1, 2, 3, 0x7F, 0xFF, 0x100, 0xFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF)
+
+
+def fuzzed_bytes(seeds: Sequence[bytes], max_random: int = 512) -> Any:
+    """A hypothesis strategy: one of ``seeds`` mutated, or up to ``max_random`` random bytes.
+
+    A mutated seed has 1 to 4 mutations: a bit flipped, a 32-bit word set to one of
+    :data:`EDGE_WORDS`, a cut, bytes inserted or deleted, or the tail of another seed
+    spliced in. (hypothesis is a test dependency, imported here only when called.)
+    """
+    import struct
+
+    from hypothesis import strategies as st
+
+    @st.composite
+    def mutated(draw: Any) -> bytes:
+        data = bytearray(draw(st.sampled_from(list(seeds))))
+        for _ in range(draw(st.integers(1, 4))):
+            op = draw(st.sampled_from(("flip", "word", "cut", "insert", "delete", "splice")))
+            at = draw(st.integers(0, max(len(data) - 1, 0)))
+            if op == "flip" and data:
+                data[at] ^= 1 << draw(st.integers(0, 7))
+            elif op == "word":
+                data[at:at + 4] = struct.pack("<I", draw(st.sampled_from(EDGE_WORDS)))
+            elif op == "cut":
+                del data[at:]
+            elif op == "insert":
+                data[at:at] = draw(st.binary(min_size=1, max_size=16))
+            elif op == "delete":
+                del data[at:at + draw(st.integers(1, 16))]
+            else:
+                other = draw(st.sampled_from(list(seeds)))
+                data = data[:at] + other[draw(st.integers(0, len(other))):]
+        return bytes(data)
+
+    return st.one_of(mutated(), st.binary(max_size=max_random))

@@ -9,47 +9,14 @@ long, coverage-guided run is ``scripts/bench.sh fuzz --minutes N``.
 
 from __future__ import annotations
 
-import struct
-
 import pytest
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
+from phd_swarm.testing import fuzzed_bytes
 from phd_swarm.tools.fuzz_targets import Finding, Target, exercise, targets
-
-#: Values a length, count, id or offset word is set to.
-EDGE_WORDS = (0, 1, 2, 3, 0x7F, 0xFF, 0x100, 0xFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF)
 
 #: Examples per target: cheap decoders get more.
 BUDGET = {"config": 60, "sweep_spec": 25, "log": 25, "evaluate": 8}
-
-
-@st.composite
-def mutated(draw: st.DrawFn, seeds: list[bytes]) -> bytes:
-    """A seed with a few mutations, or two seeds spliced."""
-    data = bytearray(draw(st.sampled_from(seeds)))
-    for _ in range(draw(st.integers(1, 4))):
-        op = draw(st.sampled_from(("flip", "word", "cut", "insert", "delete", "splice")))
-        at = draw(st.integers(0, max(len(data) - 1, 0)))
-        if op == "flip" and data:
-            data[at] ^= 1 << draw(st.integers(0, 7))
-        elif op == "word":
-            word = struct.pack("<I", draw(st.sampled_from(EDGE_WORDS)))
-            data[at:at + 4] = word
-        elif op == "cut":
-            del data[at:]
-        elif op == "insert":
-            data[at:at] = draw(st.binary(min_size=1, max_size=16))
-        elif op == "delete":
-            del data[at:at + draw(st.integers(1, 16))]
-        else:
-            other = draw(st.sampled_from(seeds))
-            data = data[:at] + other[draw(st.integers(0, len(other))):]
-    return bytes(data)
-
-
-def _inputs(target: Target) -> st.SearchStrategy[bytes]:
-    return st.one_of(mutated(target.seeds()), st.binary(max_size=512))
 
 
 @pytest.mark.parametrize("name", sorted(targets()))
@@ -61,7 +28,7 @@ def test_every_input_is_decoded_or_refused_clearly(name):
     @settings(max_examples=BUDGET.get(name, 150), deadline=None, derandomize=True,
               database=None, suppress_health_check=[HealthCheck.too_slow,
                                                     HealthCheck.data_too_large])
-    @given(_inputs(target))
+    @given(fuzzed_bytes(target.seeds()))
     def survives(data: bytes) -> None:
         exercise(target, data)
 
