@@ -8,6 +8,9 @@ even when the test fails (the pattern of rclpy's own ``test_executor.py``).
 whole process group), even on failure, then removes the Fast DDS shared-memory files that
 killed processes leave behind.
 
+``run_pids(run_dir, arg)`` finds the processes of a ``run_swarm`` run, and
+``wait_for_text(path, text, proc)`` waits for a line in one of its logs.
+
 ``fuzzed_bytes(seeds)`` is the hypothesis strategy of the fuzz tests: valid inputs mutated,
 and random bytes.
 """
@@ -250,3 +253,48 @@ def fuzzed_bytes(seeds: Sequence[bytes], max_random: int = 512) -> Any:
         return bytes(data)
 
     return st.one_of(mutated(), st.binary(max_size=max_random))
+
+
+def run_pids(run_dir: Any, arg: str) -> list[int]:
+    """PIDs of the processes of the run at ``run_dir`` with the argument ``arg``.
+
+    ``arg`` is a module (``phd_swarm.nodes.recorder``) or ``robot_id:=2``. A robot process
+    forked by the run's fork server has the server's command line and its own name
+    (``robot_2``; /proc/PID/comm).
+    """
+    import re
+    from pathlib import Path
+
+    robot = re.fullmatch(r"robot_id:=(\d+)", arg)
+    out = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            args = [a.decode(errors="replace")
+                    for a in (entry / "cmdline").read_bytes().split(b"\0")]
+            comm = (entry / "comm").read_text().strip()
+        except OSError:
+            continue
+        if not any(str(run_dir) in a for a in args):
+            continue
+        if "phd_swarm.tools.fork_server" in args and comm.startswith("robot"):
+            found = (comm == f"robot_{robot.group(1)}" if robot
+                     else arg == "phd_swarm.nodes.robot")
+        else:
+            found = arg in args
+        if found:
+            out.append(int(entry.name))
+    return out
+
+
+def wait_for_text(path: Any, text: str, proc: subprocess.Popen, timeout: float = 120.0) -> None:
+    """Wait until the file ``path`` holds ``text``; AssertionError if ``proc`` ends first."""
+    from pathlib import Path
+
+    path = Path(path)
+    deadline = time.monotonic() + timeout
+    while not (path.exists() and text in path.read_text()):
+        assert proc.poll() is None, f"the run ended before {text!r} appeared in {path}"
+        assert time.monotonic() < deadline, f"{text!r} did not appear in {path}"
+        time.sleep(0.1)

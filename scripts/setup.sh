@@ -145,24 +145,30 @@ if [ "$(cat install/.phd_swarm_build.sha256 2>/dev/null)" != "$build_sum" ]; the
     --event-handlers console_cohesion- summary+ status-
   echo "$build_sum" > install/.phd_swarm_build.sha256
 fi
-if [ "$WITH_VIEW" -eq 1 ]; then
-  VIEW_LOCK="$ROOT/requirements-view.lock"
+# extra_installed FLAG LOCK MODULE WHAT STAMP: install the pinned extra LOCK into the venv
+# (again only when LOCK changed; true when it installed now). On a native install, only
+# check that MODULE imports, and stop if not.
+extra_installed() {
+  local flag="$1" lock="$2" module="$3" what="$4" stamp="$VENV/.phd_swarm_$5.sha256" sum
   if [ "$KIND" = native ]; then
-    if ! python3 -c 'import rerun' 2>/dev/null; then
-      echo "setup.sh --with-view: on a native install, pip install --user -r" \
-           "$VIEW_LOCK (rerun-sdk); see docs/view.md" >&2
+    if ! python3 -c "import $module" 2>/dev/null; then
+      echo "setup.sh $flag: on a native install, pip install --user -r $lock ($what)" >&2
       exit 1
     fi
-  else
-    view_sum="$(sha256sum "$VIEW_LOCK" | cut -d' ' -f1)"
-    if [ "$(cat "$VENV/.phd_swarm_view.sha256" 2>/dev/null)" != "$view_sum" ]; then
-      log "installing the live view (requirements-view.lock: rerun-sdk)"
-      "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$VIEW_LOCK"
-      # Rerun's usage analytics off for this user (the view server also runs with its own
-      # configuration, analytics off): nothing leaves the machine.
-      "$VENV/bin/rerun" analytics disable >/dev/null 2>&1 || true
-      echo "$view_sum" > "$VENV/.phd_swarm_view.sha256"
-    fi
+    return 1
+  fi
+  sum="$(sha256sum "$lock" | cut -d' ' -f1)"
+  [ "$(cat "$stamp" 2>/dev/null)" != "$sum" ] || return 1
+  log "installing $what ($(basename "$lock"))"
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$lock"
+  echo "$sum" > "$stamp"
+}
+if [ "$WITH_VIEW" -eq 1 ]; then
+  if extra_installed --with-view "$ROOT/requirements-view.lock" rerun \
+      "the live view: rerun-sdk; see docs/view.md" view; then
+    # Rerun's usage analytics off for this user (the view server also runs with its own
+    # configuration, analytics off): nothing leaves the machine.
+    "$VENV/bin/rerun" analytics disable >/dev/null 2>&1 || true
   fi
   if ! command -v chromium >/dev/null 2>&1 && [ -z "${CHROMIUM:-}" ]; then
     if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null 2>&1; then
@@ -177,19 +183,7 @@ if [ "$WITH_VIEW" -eq 1 ]; then
   fi
 fi
 if [ "$WITH_FUZZ" -eq 1 ]; then
-  FUZZ_LOCK="$ROOT/requirements-fuzz.lock"
-  if [ "$KIND" = native ]; then
-    if ! python3 -c 'import atheris' 2>/dev/null; then
-      echo "setup.sh --with-fuzz: on a native install, pip install --user -r $FUZZ_LOCK" >&2
-      exit 1
-    fi
-  else
-    fuzz_sum="$(sha256sum "$FUZZ_LOCK" | cut -d' ' -f1)"
-    if [ "$(cat "$VENV/.phd_swarm_fuzz.sha256" 2>/dev/null)" != "$fuzz_sum" ]; then
-      log "installing the fuzz benchmark's atheris (requirements-fuzz.lock)"
-      "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$FUZZ_LOCK"
-      echo "$fuzz_sum" > "$VENV/.phd_swarm_fuzz.sha256"
-    fi
-  fi
+  extra_installed --with-fuzz "$ROOT/requirements-fuzz.lock" atheris \
+    "the fuzz benchmark's atheris" fuzz || true
 fi
 log "ready (source scripts/env.sh to use it)"

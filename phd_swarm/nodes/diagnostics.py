@@ -185,6 +185,9 @@ class RecorderHealth:
         Step messages expected so far (those checked for gaps).
     world_writers_pending : int
         World topics still without a writer before the truth is subscribed (start-up).
+    rejected : int
+        Messages it could not read its step from (recorded all the same), or that a team
+        topic carried for no topic of this run (not recorded).
     """
 
     messages: int
@@ -193,6 +196,7 @@ class RecorderHealth:
     gaps: Mapping[str, int] = field(default_factory=dict)
     expected: int = 0
     world_writers_pending: int = 0
+    rejected: int = 0
 
     @property
     def missing(self) -> int:
@@ -313,7 +317,8 @@ def recorder_status(h: RecorderHealth, previous: RecorderHealth | None = None,
               ("step_messages_expected", h.expected), ("step_messages_missing", missing),
               ("gap_topics", ", ".join(f"{t} ({h.gaps[t]})" for t in gaps[:shown])
                + (f" and {len(gaps) - shown} more" if len(gaps) > shown else "")),
-              ("world_writers_pending", h.world_writers_pending)]
+              ("world_writers_pending", h.world_writers_pending),
+              ("rejected_messages", h.rejected)]
     return _status("recorder", level, "; ".join([doing, *problems]), values)
 
 

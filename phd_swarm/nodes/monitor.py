@@ -417,9 +417,13 @@ class MonitorNode(Node):
             # A run that never stepped (the team did not start) has no result to report.
             self.get_logger().error("monitor: no step was processed; no summary written")
         elif path:
-            Path(path).parent.mkdir(parents=True, exist_ok=True)
-            Path(path).write_text(json.dumps(self.summary(), indent=2) + "\n")
-            self.get_logger().info(f"monitor: summary written to {path}")
+            try:
+                Path(path).parent.mkdir(parents=True, exist_ok=True)
+                Path(path).write_text(json.dumps(self.summary(), indent=2) + "\n")
+                self.get_logger().info(f"monitor: summary written to {path}")
+            except OSError as exc:  # a full disk: say so, and end as usual
+                self.get_logger().error(f"monitor: cannot write the summary {path}: "
+                                        f"{exc.strerror or exc}")
         if self.params["exit_when_done"]:
             # The last step's messages must reach the recorder before this process exits.
             for pub in (self.metrics_pub, self.estimates_pub):

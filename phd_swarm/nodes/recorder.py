@@ -75,7 +75,6 @@ from rclpy.clock import Clock, ClockType
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from rclpy.serialization import deserialize_message
 
 from phd_swarm.config import load_run_config
 from phd_swarm.config.node_params import RECORDER, SHARED
@@ -83,7 +82,7 @@ from phd_swarm.logs.bag_metadata import write_bag_metadata
 from phd_swarm.logs.mcap_log import LogError, LogWriter
 from phd_swarm.logs.qos_yaml import qos_yaml
 from phd_swarm.logs.schemas import DefinitionNotFoundError
-from phd_swarm.nodes import completeness
+from phd_swarm.nodes import cdr, completeness
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.diagnostics import GapCounter, RecorderHealth, recorder_status
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
@@ -153,6 +152,12 @@ class Recorder(Node):
             raise ParameterError(f"node {self.get_fully_qualified_name()}: parameter output: "
                                  f"{exc}") from None
         self._subs: dict[str, Any] = {}
+        #: True once the log can take no more (:meth:`_stop_recording`): spin_nodes ends
+        #: the process with :attr:`exit_code`.
+        self.finished = False
+        self.exit_code = 0
+        #: Messages recorded whose step could not be read (:meth:`_unreadable`).
+        self.unreadable = 0
         #: Topics whose messages arrive inside the team topics (team_routes.py).
         self.routes = TeamRoutes(self.get_logger().warning)
         self._skipped: set[str] = set()
@@ -311,15 +316,38 @@ class Recorder(Node):
         if not stamped:
             def on_message(data: bytes) -> None:
                 t = now()
-                write(topic, data, t, t)
+                try:
+                    write(topic, data, t, t)
+                except LogError as exc:
+                    self._stop_recording(exc)
             return on_message
 
         def on_stamped(data: bytes) -> None:
             t = now()
             # Odd encapsulation kinds (CDR_LE = 1, PL_CDR_LE = 3, ...) are little-endian.
-            sec, nsec = (_STAMP_LE if data[1] & 1 else _STAMP_BE).unpack_from(data, 4)
-            write(topic, data, t, sec * 1_000_000_000 + nsec if sec >= 0 else t)
+            try:
+                sec, nsec = (_STAMP_LE if data[1] & 1 else _STAMP_BE).unpack_from(data, 4)
+                stamp = sec * 1_000_000_000 + nsec if sec >= 0 else t
+            except (struct.error, IndexError):  # too short for a stamp: kept, stamped now
+                stamp = t
+            try:
+                write(topic, data, t, stamp)
+            except LogError as exc:
+                self._stop_recording(exc)
         return on_stamped
+
+    def _stop_recording(self, exc: LogError) -> None:
+        """The log takes no more (its disk is full): end the process, with exit code 1.
+
+        Recording on would lose messages silently; a run is what its log says. What was
+        written stays readable up to the last complete chunk (docs/ros.md, "Failures").
+        """
+        if self.finished:
+            return
+        self.finished = True
+        self.exit_code = 1
+        self.get_logger().error(f"recording stopped: {exc}; the log keeps every message up "
+                                "to its last complete chunk")
 
     def _others(self, record: Callable[[bytes], None]) -> Callable[[bytes], None]:
         """``record`` without this recorder's own reports (see :meth:`health`)."""
@@ -340,27 +368,38 @@ class Recorder(Node):
             return int(round((sec * 1_000_000_000 + nsec) / dt_ns))
 
         if topic == T.WORLD_ROBOTS:
-            def on_team(data: bytes) -> None:
-                record(data)
-                msg = deserialize_message(data, TeamState)
-                steps.add(int(msg.step))
+            def note(data: bytes) -> None:
+                msg = cdr.decode(TeamState, data)
+                ids, alive = msg["robot_ids"].astype(np.int64), msg["alive"]
+                if len(ids) != len(alive):
+                    raise ValueError(f"{len(ids)} robot ids, {len(alive)} alive flags")
                 flags = np.zeros(self._robots, dtype=bool)
-                ids = np.asarray(msg.robot_ids, dtype=np.int64)
-                ok = ids < self._robots
-                flags[ids[ok]] = np.asarray(msg.alive, dtype=bool)[ok]
-                self._team[int(msg.step)] = flags
-            return on_team
-        if topic.endswith("/status"):
-            def on_status(data: bytes) -> None:
-                record(data)
+                ok = (ids >= 0) & (ids < self._robots)
+                flags[ids[ok]] = alive[ok]
+                steps.add(int(msg["step"]))
+                self._team[int(msg["step"])] = flags
+        elif topic.endswith("/status"):
+            def note(data: bytes) -> None:
                 if status_state(data) == RobotStatus.STATE_STEP_DONE:
                     steps.add(step(data))
-            return on_status
+        else:
+            def note(data: bytes) -> None:
+                steps.add(step(data))
 
         def on_step(data: bytes) -> None:
             record(data)
-            steps.add(step(data))
+            try:
+                note(data)
+            except (ValueError, IndexError, struct.error) as exc:  # CdrError is a ValueError
+                self._unreadable(topic, exc)
         return on_step
+
+    def _unreadable(self, topic: str, exc: Exception) -> None:
+        """A message of ``topic`` recorded whose step could not be read: counted, warned."""
+        self.unreadable += 1
+        if self.unreadable == 1 or self.unreadable % 100 == 0:
+            self.get_logger().warning(f"recorded a message on {topic} whose step cannot be "
+                                      f"read ({self.unreadable} so far): {exc}")
 
     def check_completeness(self) -> completeness.Completeness | None:
         """Expected, recorded and missing steps of every step topic recorded so far.
@@ -382,7 +421,8 @@ class Recorder(Node):
         return RecorderHealth(
             self.log.message_count, len(self.topics), max(self._team, default=-1), gaps,
             self._gaps.expected if self._gaps else 0,
-            len(self._world_topics) if self._world_timer is not None else 0)
+            len(self._world_topics) if self._world_timer is not None else 0,
+            self.unreadable + sum(self.routes.rejected.values()))
 
     def discover(self) -> None:
         """Subscribe to the recorded topics (:data:`RECORDED`) that appeared in the graph."""

@@ -63,9 +63,16 @@ def _pump(stream: IO[str], log: IO[str], echo: bool, marks: list[tuple[str, thre
 
     ``marks``: (marker, event) pairs: an event is set at the first line holding its marker.
     """
+    writing = True
     for line in stream:
-        log.write(line)
-        log.flush()
+        if writing:
+            try:
+                log.write(line)
+                log.flush()
+            except OSError as exc:  # a full disk: keep reading, or the child would block
+                writing = False
+                print(f"run_swarm: cannot write {getattr(log, 'name', 'a log')}: "
+                      f"{exc.strerror or exc}; its lines are dropped", file=sys.stderr)
         for marker, event in marks:
             if not event.is_set() and marker in line:
                 event.set()

@@ -22,9 +22,12 @@
    memory, whatever the team size.
 
 A robot process that dies mid-run does not stop the run: the world counts it dead after
-``step_timeout`` and the summary lists it in ``dead_robots``. A team that does not come up
-does not make a run: the world gives up (naming the missing robots and the likely cause),
-no summary is written and the exit code is 3.
+``step_timeout`` and the summary lists it in ``dead_robots``. The world, the monitor or the
+recorder dying does: the run stops at once, ``summary.json`` gives the ``failure`` and the
+exit code is 4 (:mod:`phd_swarm.tools.run_failures`). A team that does not come up does not
+make a run: the world gives up (naming the missing robots and the likely cause), no summary
+is written and the exit code is 3. An output folder that cannot be written, or a disk
+nearly full, is refused before anything starts (exit code 2).
 """
 
 from __future__ import annotations
@@ -72,6 +75,14 @@ from phd_swarm.tools.processes import (
     Swarm,
     process_cpu_seconds,
     stop_process_group,
+)
+from phd_swarm.tools.run_failures import (
+    EXIT_PROCESS_DIED,
+    ProcessDied,
+    check_output_dir,
+    describe_exit,
+    mark_failure,
+    vital_failure,
 )
 from phd_swarm.tools.view_server import ViewServerError
 
@@ -186,6 +197,7 @@ def run(opts: argparse.Namespace) -> int:
     rc = resolve(opts)
     s = rc.scenario
     controller = s.system.label()
+    check_output_dir(Path(opts.out))
     run_dir = fresh_run_dir(Path(opts.out), opts.name or run_name(rc))
     record = not opts.no_record
     per = max(1, opts.robots_per_process)
@@ -209,6 +221,7 @@ def run(opts: argparse.Namespace) -> int:
     started = time.monotonic()
     stepping = Stepping(started, READY_LINE, DONE_LINE)
     interrupted = False
+    failure: str | None = None
     code = 0
     server = None
     view_server = None
@@ -275,17 +288,14 @@ def run(opts: argparse.Namespace) -> int:
                 swarm.sample(n)
             swarm.sample_fork_server()
             stepping.note(swarm.cpu)
-            monitor = swarm.procs["monitor"]
-            if monitor.poll() is not None and monitor.returncode != 0:
-                raise RuntimeError(f"the monitor exited with code {monitor.returncode}; see "
-                                   f"{run_dir}/logs/monitor.log")
+            died = vital_failure(swarm.procs, record)
+            if died:
+                raise ProcessDied(died)
         if world.returncode == EXIT_NOT_READY:
             _explain_start_failure(swarm, run_dir)
             code = EXIT_NOT_READY
         elif world.returncode != 0:
-            print(f"run_swarm: the world exited with code {world.returncode}; see "
-                  f"{run_dir}/logs/world.log", file=sys.stderr)
-            code = 1
+            raise ProcessDied(f"the world {describe_exit(world.returncode)}")
         if code != EXIT_NOT_READY:
             end_timeout = float(rc.param("monitor", "end_timeout")) + 15.0
             try:
@@ -295,6 +305,11 @@ def run(opts: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         interrupted = True
         print("\nrun_swarm: interrupted; stopping the swarm", flush=True)
+    except ProcessDied as exc:
+        failure = str(exc)
+        print(f"run_swarm: {failure}; stopping the run (see {run_dir}/logs/)", file=sys.stderr,
+              flush=True)
+        code = EXIT_PROCESS_DIED
     except RuntimeError as exc:
         print(f"run_swarm: {exc}", file=sys.stderr)
         code = 1
@@ -324,8 +339,14 @@ def run(opts: argparse.Namespace) -> int:
         if view_server is not None:
             # The view's server is part of what --view costs (docs/benchmarks.md).
             swarm.cpu["view_server"] = process_cpu_seconds(view_server.pid)
+        if failure is not None:
+            mark_failure(run_dir / "summary.json", failure, {
+                "wall_duration_s": wall, "cpu_s": {k: round(v, 2) for k, v in
+                                                   sorted(swarm.cpu.items())}})
         code = _report(run_dir, rc, wall, interrupted, swarm.cpu, swarm.memory,
                        stepping.figures(swarm.cpu)) or code
+        if failure is not None:
+            code = EXIT_PROCESS_DIED
     if view_server is not None:
         if not interrupted and code != EXIT_NOT_READY:
             view_run.hold(view_server, PROG, True if opts.view_hold else None)
@@ -448,6 +469,11 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
         print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
         return 130 if interrupted else 1
     summary = json.loads(path.read_text())
+    if "failure" in summary and not summary.get("steps"):
+        # The monitor wrote none: the summary is run_swarm's, the failure and what it knows.
+        print(f"run_swarm: failed: {summary.get('failure')}; no step was summarised; what "
+              f"was recorded: scripts/evaluate.sh {run_dir}/run.mcap", file=sys.stderr)
+        return EXIT_PROCESS_DIED
     s = rc.scenario
     stepping = summary.pop("wall_duration_s")
     # The fork server's imports are the robot processes' start-up, done once for them all.
@@ -461,7 +487,10 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
                     "cpu_s_per_robot": robots_cpu / s.robots,
                     "peak_memory_mb": {k: round(v, 1) for k, v in sorted(memory.items())},
                     **stepping_figures})
-    path.write_text(json.dumps(summary, indent=2) + "\n")
+    try:
+        path.write_text(json.dumps(summary, indent=2) + "\n")
+    except OSError as exc:  # a full disk: the monitor's summary stays as it was
+        print(f"run_swarm: cannot complete {path}: {exc.strerror or exc}", file=sys.stderr)
     print(f"run_swarm: {summary['steps']}/{s.steps} steps, {summary['sim_duration_s']:g} s sim "
           f"in {stepping:.1f} s wall ({summary['real_time_factor'] or 0:.2f} x real time; "
           f"{wall:.1f} s with start-up and shut-down); final OSPA "
@@ -476,6 +505,9 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
               "it); check it with scripts/evaluate.sh", file=sys.stderr)
     files = "run.mcap, summary.json" if (run_dir / "run.mcap").exists() else "summary.json"
     print(f"run_swarm: results in {run_dir}/ ({files}, config.yaml, logs/)", flush=True)
+    if "failure" in summary:
+        print(f"run_swarm: failed: {summary['failure']}", file=sys.stderr, flush=True)
+        return EXIT_PROCESS_DIED
     return 130 if interrupted else 0
 
 

@@ -1,21 +1,23 @@
 """Fuzzed bytes on the topics nodes take raw never escape a callback (issue 40).
 
-A robot's inbox and measurement set and the monitor's team bundles are raw subscriptions:
-the callback gets the bytes that arrived. Mutations of what a running team really sent are
-fed to the callbacks of a running team (as rclpy would call them); each input must be
-taken or rejected and counted, none may raise, and the team still finishes. Deterministic
-(derandomised) and in lockstep.
+A robot's inbox and measurement set, the monitor's team bundles and everything the recorder
+takes are raw subscriptions: the callback gets the bytes that arrived. Mutations of what a
+running team really sent are fed to the callbacks of that team (as rclpy would call them);
+each input must be taken or rejected and counted, none may raise, and the team still
+finishes. Deterministic (derandomised) and in lockstep.
 """
 
 from __future__ import annotations
 
 import pytest
 from hypothesis import HealthCheck, given, settings
+from rclpy.parameter import Parameter
 
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.qos import subscription_qos
+from phd_swarm.nodes.recorder import Recorder
 from phd_swarm.testing import fuzzed_bytes, small_static_scenario, start_swarm
-from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, MessageBundle
+from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, MessageBundle, RobotStatus
 
 #: Inputs fed to each callback.
 EXAMPLES = 120
@@ -28,25 +30,40 @@ def test_fuzzed_raw_inputs_are_rejected_and_counted_and_the_team_finishes(tmp_pa
     scenario = small_static_scenario(robots=3, steps=16)
     with InProcessRos(executor="events") as ros:
         world, monitor, robots = start_swarm(ros, tmp_path, scenario)
+        recorder = ros.add(Recorder(context=ros.context, parameter_overrides=[
+            Parameter("output", value=str(tmp_path / "run.mcap")),
+            Parameter("params_file", value=str(tmp_path / "params.yaml"))]))
         victim = robots[1]
         spy = ros.node("spy")
-        seen: dict[str, list[bytes]] = {"inbox": [], "scan": [], "bundle": []}
+        seen: dict[str, list[bytes]] = {"inbox": [], "scan": [], "bundle": [], "status": [],
+                                        "world": []}
         for key, typ, topic, qos in (
                 ("inbox", InboxMessage, "/robot_1/inbox", "INBOX"),
                 ("scan", MeasurementSet, "/robot_1/measurements", "STEP"),
-                ("bundle", MessageBundle, T.TEAM_OUTPUTS, "STEP")):
+                ("bundle", MessageBundle, T.TEAM_OUTPUTS, "STEP"),
+                ("status", RobotStatus, T.TEAM_STATUS, "STEP"),
+                ("world", MessageBundle, T.WORLD_OUTPUTS, "STEP")):
             spy.create_subscription(typ, topic, seen[key].append, subscription_qos(qos),
                                     raw=True)
         assert ros.spin_until(lambda: victim.filter.step >= 3 and all(seen.values()),
                               timeout=90.0)
-        rejected_before = sum(victim.rejections.values()), monitor.rejected
-        feeds = {"inbox": victim._on_envelope, "scan": victim._on_scan,
-                 "bundle": monitor._on_bundle}
-        for key, feed in feeds.items():
+        def rejected() -> tuple[int, int, int]:
+            return (sum(victim.rejections.values()), monitor.rejected,
+                    sum(recorder.routes.rejected.values()))
+
+        before = rejected()
+        feeds = [(victim._on_envelope, "inbox"), (victim._on_scan, "scan"),
+                 (monitor._on_bundle, "bundle")]
+        feeds += [(recorder._subs[topic].callback, key) for topic, key in (
+            (T.TEAM_OUTPUTS, "bundle"), (T.TEAM_STATUS, "status"), (T.WORLD_OUTPUTS, "world"),
+            (T.WORLD_TRUTH, "status"), (T.MONITOR_METRICS, "status"))]
+        for feed, key in feeds:
             _fuzz(feed, seen[key][:8])
-        rejected_after = sum(victim.rejections.values()), monitor.rejected
-        assert rejected_after[0] > rejected_before[0] and rejected_after[1] > rejected_before[1]
+        after = rejected()
+        assert all(a > b for a, b in zip(after, before, strict=True)), (before, after)
         assert ros.spin_until(lambda: monitor.done, timeout=180.0)
+        recorder.close()
+        assert not recorder.finished  # it never stopped recording
 
 
 def _fuzz(feed, seeds: list[bytes]) -> None:

@@ -404,3 +404,71 @@ def test_completeness_names_the_missing_steps_and_is_stored_in_the_log(ros, tmp_
     from phd_swarm.nodes.completeness import Completeness
 
     assert Completeness.from_dict(json.loads(meta["report"])) == report
+
+
+@pytest.mark.ros
+def test_a_message_too_short_for_its_stamp_is_recorded_stamped_on_receipt(ros, tmp_path):
+    """Bytes from a stranger on a stamped topic used to raise inside the callback."""
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out), discover=False)
+    rec.subscribe("/robot_1/status", "phd_swarm_msgs/msg/RobotStatus", QoSProfile(depth=10))
+    pub = ros.node("stranger").create_publisher(RobotStatus, "/robot_1/status",
+                                                QoSProfile(depth=10))
+    _matched(ros, [pub])
+    pub.publish(b"\x00\x01\x00\x00\x07")
+    pub.publish(_status(2, robot_id=1))
+    assert ros.spin_until(lambda: rec.message_count == 2, timeout=10.0)
+    assert not rec.finished
+    rec.close()
+    short, good = (r for r in open_log(out).messages(decode=False))
+    assert short.data == b"\x00\x01\x00\x00\x07" and short.publish_time_ns == short.log_time_ns
+    assert good.publish_time_ns == 2 * SEC + 500
+
+
+@pytest.mark.ros
+def test_a_full_disk_stops_the_recording_and_keeps_the_finished_chunks(ros, tmp_path):
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out), discover=False, chunk_size=2048)
+    rec.subscribe("/robot_0/status", "phd_swarm_msgs/msg/RobotStatus", QoSProfile(depth=100))
+    pub = ros.node("talker").create_publisher(RobotStatus, "/robot_0/status",
+                                              QoSProfile(depth=100))
+    _matched(ros, [pub])
+    for k in range(40):  # ~4 chunks of 2 kB
+        pub.publish(_status(k))
+    assert ros.spin_until(lambda: rec.message_count == 40, timeout=10.0)
+    written = out.stat().st_size
+
+    def full(data: bytes) -> int:
+        raise OSError(28, "No space left on device")
+
+    rec.log._file.write = full
+    for k in range(40, 100):
+        pub.publish(_status(k))
+    assert ros.spin_until(lambda: rec.finished, timeout=10.0)
+    assert rec.exit_code == 1 and "No space left on device" in rec.log.failure
+    rec.close()  # as spin_nodes does next: nothing more is written, nothing raises
+    assert out.stat().st_size == written
+    with open_log(out) as log:
+        assert log.truncated
+        steps = [r.msg.step for r in log.messages()]
+    assert steps == list(range(len(steps))) and 20 <= len(steps) <= 40
+
+
+@pytest.mark.ros
+def test_a_team_state_it_cannot_read_is_recorded_counted_and_the_recorder_goes_on(ros,
+                                                                                 tmp_path):
+    """Found by fuzzing the recorder's callbacks (issue 40): the step bookkeeping raised."""
+    out = tmp_path / "run.mcap"
+    rec = _recorder(ros, output=str(out), params_file=str(_config(tmp_path)), discover=False,
+                    wait_for_world=False)
+    team = ros.node("stranger").create_publisher(TeamState, T.WORLD_ROBOTS,
+                                                 publisher_qos("STEP"))
+    _matched(ros, [team])
+    team.publish(b"\x00\x01\x00\x00\x07")                        # not a team state
+    team.publish(TeamState(header=_stamp(1), step=1, robot_ids=[0, 1], alive=[True]))
+    team.publish(TeamState(header=_stamp(2), step=2, robot_ids=[0], alive=[True]))
+    assert ros.spin_until(lambda: rec.message_count == 3, timeout=10.0)
+    assert rec.unreadable == 2 and not rec.finished
+    assert rec.health().rejected == 2 and rec.health().last_step == 2
+    rec.close()
+    assert len(list(open_log(out).messages(topics=[T.WORLD_ROBOTS], decode=False))) == 3

@@ -14,6 +14,8 @@ from pathlib import Path
 import pytest
 
 from phd_swarm.logs.mcap_log import read_messages, read_metadata, summarize
+from phd_swarm.testing import run_pids as _pids
+from phd_swarm.testing import wait_for_text as _wait_for
 from phd_swarm.tools.run_swarm import WALL_CLOCK_FIELDS
 from phd_swarm_msgs.msg import RobotStatus
 
@@ -161,35 +163,6 @@ def test_killing_a_robot_process_mid_run_leaves_the_others_running(tmp_path, chi
     assert len(after) >= 20 and all(m.robots_reported == ROBOTS - 1 for m in after)
 
 
-def _pids(run_dir: Path, arg: str) -> list[int]:
-    """PIDs of this run's processes with the argument ``arg`` (a module, ``robot_id:=2``).
-
-    A robot process forked by the run's fork server has the server's command line and its
-    own name (``robot_2``; /proc/PID/comm).
-    """
-    robot = re.fullmatch(r"robot_id:=(\d+)", arg)
-    out = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            args = [a.decode(errors="replace")
-                    for a in (entry / "cmdline").read_bytes().split(b"\0")]
-            comm = (entry / "comm").read_text().strip()
-        except OSError:
-            continue
-        if not any(str(run_dir) in a for a in args):
-            continue
-        if "phd_swarm.tools.fork_server" in args and comm.startswith("robot"):
-            found = (comm == f"robot_{robot.group(1)}" if robot
-                     else arg == "phd_swarm.nodes.robot")
-        else:
-            found = arg in args
-        if found:
-            out.append(int(entry.name))
-    return out
-
-
 @pytest.mark.ros
 @pytest.mark.slow
 def test_a_team_that_never_comes_up_fails_the_run_without_a_summary(tmp_path, children):
@@ -264,14 +237,6 @@ def _fast_timeouts(tmp_path: Path) -> Path:
         "progress_every: 20", "progress_every: 2"))
     assert "tick_period: 0.2" in config.read_text()
     return config
-
-
-def _wait_for(path: Path, text: str, proc, timeout: float = 120.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not (path.exists() and text in path.read_text()):
-        assert proc.poll() is None, f"the run ended before {text!r} appeared in {path}"
-        assert time.monotonic() < deadline, f"{text!r} did not appear in {path}"
-        time.sleep(0.1)
 
 
 def _wait_for_step(monitor: Path, printed: int, proc, timeout: float = 120.0) -> None:
