@@ -175,11 +175,13 @@ def small_static_scenario(robots: int = 5, steps: int = 64, seed: int = 7) -> An
 
 def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str | None = None,
                 observers: int = 1, robot: dict[str, Any] | None = None,
+                shared: dict[str, Any] | None = None,
                 **world: Any) -> tuple[Any, Any, list[Any]]:
     """World, monitor (keeping its images) and one robot node per robot on ``ros``.
 
     ``controller`` replaces ``scenario.system.controller`` if given; ``robot`` and
-    ``world`` override those nodes' parameters.
+    ``world`` override those nodes' parameters, ``shared`` every node's (e.g.
+    ``auth_key_file``).
 
     Writes the resolved parameter file to ``tmp_dir/params.yaml`` and starts every node
     from it, as the scripts do. Spin ``ros`` until ``monitor.done``.
@@ -201,7 +203,7 @@ def start_swarm(ros: InProcessRos, tmp_dir: Any, scenario: Any, controller: str 
 
     if controller is not None:
         scenario = scenario.with_system(controller=controller)
-    rc = RunConfig(scenario).with_overrides(
+    rc = RunConfig(scenario, dict(shared or {})).with_overrides(
         world={"observers": observers, **world},
         robot={"observers": observers, **(robot or {})},
         monitor={"progress_every": 0})

@@ -15,6 +15,9 @@ from phd_swarm.core.params import ParamSpec
 #: Parameters every node has (the ``/**`` block of a config file), besides ``scenario.*``.
 SHARED = (
     ParamSpec("world_frame_id", "map", "Frame id of the world (REP 105) in every header."),
+    ParamSpec("auth_key_file", "", "The run's key (hex, a file only its user can read): the "
+              "world and the robots sign what steers a robot with it and reject what is not "
+              "signed ('' for none; run_swarm.sh makes one per run)."),
 )
 
 WORLD = (

@@ -25,7 +25,7 @@ import io
 import logging
 import os
 import struct
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -322,6 +322,24 @@ class LogReader:
         if isinstance(exc, McapError):
             return LogError(f"{self.path}: {exc}")
         return LogError(f"{self.path}: damaged log ({type(exc).__name__}: {exc})")
+
+    def recorded_decoder(self, topic: str) -> Callable[[bytes], Any]:
+        """A decoder of ``topic``'s CDR by the definition recorded in the log (mcap_ros2).
+
+        For messages recorded with another version of their type than the installed one
+        (a field added since). LogError if the log has no such topic.
+        """
+        if self._summary is not None:
+            schemas, channels = self._summary.schemas, self._summary.channels.values()
+        else:
+            records = list(self._scan().records())
+            schemas = {r.id: r for r in records if isinstance(r, Schema)}
+            channels = [r for r in records if isinstance(r, Channel)]
+        for channel in channels:
+            if channel.topic == topic and channel.schema_id in schemas:
+                return self._decoders.decoder_for(channel.message_encoding,
+                                                  schemas[channel.schema_id])
+        raise LogError(f"{self.path}: no topic {topic}")
 
     def _decode(self, schema: Schema, channel: Channel, message: Message) -> Any:
         try:

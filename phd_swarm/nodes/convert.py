@@ -33,7 +33,7 @@ from std_msgs.msg import Header
 
 from phd_swarm.core.geometry.grid import Grid
 from phd_swarm.core.scan import Scan
-from phd_swarm.nodes import cdr
+from phd_swarm.nodes import auth, cdr
 from phd_swarm_msgs.msg import DensityGrid, MeasurementSet, TargetSet
 
 #: ``owner_id`` / ``source_id`` of team-wide grids and sets, and of ground truth.
@@ -42,6 +42,10 @@ TEAM_ID = 0xFFFFFFFF
 
 class InvalidMessage(ValueError):
     """A message that cannot be right: the text names the field and the problem."""
+
+
+class Unauthenticated(InvalidMessage):
+    """A message of a keyed run without the MAC of the run's key (:mod:`.auth`)."""
 
 
 # ------------------------------------------------------------------------ primitives
@@ -158,15 +162,32 @@ def scan_from_fields(f: dict, max_measurements: int) -> Scan:
                 field_points(z, "measurements"))
 
 
-def decode_scan(data: bytes, max_measurements: int) -> Scan:
+def encode_scan(step: int, dt: float, frame_id: str, robot_id: int, sensor: np.ndarray,
+                z: np.ndarray, key: bytes | None = None) -> bytes:
+    """The CDR of the ``MeasurementSet`` of robot ``robot_id`` at ``step`` (the world's).
+
+    ``sensor``: its position (2,); ``z``: the measurements (N, 2). Sealed with the run's
+    ``key`` (:func:`.auth.seal`; an empty ``mac`` without one).
+    """
+    full = cdr.encode(MeasurementSet, {
+        "header": {"stamp": stamp_fields(step, dt), "frame_id": frame_id},
+        "robot_id": robot_id, "step": step, "sensor_position": sensor, "measurements": z})
+    return auth.seal(key, full[:-4])  # without its empty mac (aligned: nothing precedes it)
+
+
+def decode_scan(data: bytes, max_measurements: int, key: bytes | None = None) -> Scan:
     """The CDR of a ``MeasurementSet`` -> scan (what a robot takes from the world), checked.
 
     Raises
     ------
+    Unauthenticated
+        With the run's ``key``: bytes without its MAC (checked before anything is decoded).
     InvalidMessage
         Bytes that do not decode (:class:`.cdr.CdrError`), or what
         :func:`scan_from_fields` refuses.
     """
+    if key is not None and not auth.is_sealed(key, data):
+        raise Unauthenticated("measurement set not signed with this run's key")
     try:
         fields = cdr.decode(MeasurementSet, data)
     except cdr.CdrError as exc:

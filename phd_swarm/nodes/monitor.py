@@ -101,6 +101,8 @@ class MonitorNode(Node):
         self.done = False
         self.finished = False
         self.rejected = 0
+        #: Messages each robot rejected so far (its statuses' ``rejected_messages``).
+        self.robots_rejected: dict[int, int] = {}
         self.truth: dict[int, np.ndarray] = {}
         self.alive: dict[int, frozenset[int]] = {}
         #: What a robot's step is made of and how the team's is joined: the estimator's
@@ -230,6 +232,8 @@ class MonitorNode(Node):
             if math.isfinite(msg.goal.x) and math.isfinite(msg.goal.y):
                 self.goals[msg.robot_id] = np.array([msg.goal.x, msg.goal.y])
             self.dead_reported[int(msg.robot_id)] = frozenset(int(i) for i in msg.dead_ids)
+        if msg.robot_id in self._prefix:  # a running count: the latest is the total
+            self.robots_rejected[int(msg.robot_id)] = int(msg.rejected_messages)
         self._touch()
 
     def _on_cell(self, robot: int, cell: dict[str, Any]) -> None:
@@ -401,6 +405,7 @@ class MonitorNode(Node):
             "rejoined_robots": sorted(rejoined),
             "ospa_c": s.ospa_c, "ospa_p": s.ospa_p,
             "rejected_messages_monitor": self.rejected,
+            "rejected_messages_robots": sum(self.robots_rejected.values()),
             **({"figures": figure_means(self.series, self.figure_names)}
                if self.figures_hook else {}),
         }

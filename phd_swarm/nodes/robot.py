@@ -88,7 +88,7 @@ from phd_swarm.core.agent import Team
 from phd_swarm.core.exchange.base import Envelope, ProtocolError
 from phd_swarm.core.exchange.faults import FaultyLink, LinkFaults
 from phd_swarm.core.scan import Scan
-from phd_swarm.nodes import convert, inbox
+from phd_swarm.nodes import auth, convert, inbox
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.bundle import publish_watched
 from phd_swarm.nodes.completeness import ranges
@@ -136,6 +136,8 @@ class RobotNode(Node):
                                  f"set to 0..{self.scenario.robots - 1} (the scenario has "
                                  f"{self.scenario.robots} robots), got {rid}")
         self.robot_id = rid
+        #: The run's key (auth.py): what this robot sends is signed, what it takes checked.
+        self.key = auth.node_key(self)
         self.frame_id = self.params["world_frame_id"]
         self.dt = self.scenario.dt
         self.grid = self.scenario.grid
@@ -309,7 +311,7 @@ class RobotNode(Node):
         """The world's measurement set for this robot, taken as CDR (a raw subscription)."""
         self._alive_at = time.monotonic()
         try:
-            scan = convert.decode_scan(data, self.params["max_measurements"])
+            scan = convert.decode_scan(data, self.params["max_measurements"], self.key)
             if scan.robot_id != self.robot_id:
                 raise convert.InvalidMessage(f"measurement set of robot {scan.robot_id} on "
                                              f"robot {self.robot_id}'s topic")
@@ -318,7 +320,7 @@ class RobotNode(Node):
                                              f"{self.last_scan_step}, steps "
                                              f"{self.scenario.steps})")
         except convert.InvalidMessage as exc:
-            self._reject("measurements", f"measurements from the world: {exc}")
+            self._reject(_kind(exc, "measurements"), f"measurements from the world: {exc}")
             return
         self.last_scan_step = scan.step
         self.pending.append(scan)
@@ -366,9 +368,9 @@ class RobotNode(Node):
         """Take the protocol messages of one envelope (its CDR) in the order they were sent."""
         self._alive_at = time.monotonic()
         try:
-            sender, pieces = inbox.unpack_cdr(envelope, self.wire.types)
+            sender, pieces = inbox.unpack_cdr(envelope, self.wire.types, self.key)
         except convert.InvalidMessage as exc:
-            self._reject("envelope", f"inbox message: {exc}")
+            self._reject(_kind(exc, "envelope"), f"inbox message: {exc}")
             return
         for kind, data in pieces:
             self._on_inbox(kind, data, sender)
@@ -543,7 +545,7 @@ class RobotNode(Node):
                     self.wire.kind(env.msg), self.wire.encode(env.msg, self.dt, self.frame_id))
             by_dst.setdefault(env.dst, []).append(piece)
         for dst, pieces in by_dst.items():
-            self._peer_publisher(dst).publish(inbox.pack_cdr(self.robot_id, pieces))
+            self._peer_publisher(dst).publish(inbox.pack_cdr(self.robot_id, pieces, self.key))
 
     def _release_held(self) -> None:
         """One tick period passed: publish the delayed envelopes that are due."""
@@ -571,6 +573,11 @@ class RobotNode(Node):
         if n <= 10 or n % _LOG_EVERY == 0:
             self.get_logger().warning(f"robot {self.robot_id}: rejected {reason} "
                                       f"({n} rejected so far)")
+
+
+def _kind(exc: convert.InvalidMessage, kind: str) -> str:
+    """The counter a rejection goes to: ``unauthenticated``, or ``kind``."""
+    return "unauthenticated" if isinstance(exc, convert.Unauthenticated) else kind
 
 
 def main(args: list[str] | None = None) -> int:

@@ -54,7 +54,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from visualization_msgs.msg import MarkerArray
 
 from phd_swarm.config.node_params import SHARED, WORLD
-from phd_swarm.nodes import bundle, convert
+from phd_swarm.nodes import auth, bundle, convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import ranges
 from phd_swarm.nodes.diagnostics import WorldHealth, world_status
@@ -106,6 +106,8 @@ class WorldNode(Node):
         self.scenario = declare_scenario(self)
         self.world = World(self.scenario)
         self.frame_id = self.params["world_frame_id"]
+        #: The run's key (auth.py): the measurement sets are signed with it.
+        self.key = auth.node_key(self)
         self.dt = self.scenario.dt
         self.ids = [int(i) for i in self.world.robot_ids]
         self.finished = False
@@ -200,9 +202,7 @@ class WorldNode(Node):
             pieces.append((self._topics[r][0], pose))
         h = convert.header(k, self.dt, self.frame_id)
         for r, z in w.scans().items():
-            scan = serialize_message(MeasurementSet(
-                header=h, robot_id=r, step=k, sensor_position=convert.points(positions[r])[0],
-                measurements=convert.points(z)))
+            scan = convert.encode_scan(k, self.dt, self.frame_id, r, positions[r], z, self.key)
             self.scan_pubs[r].publish(scan)
             pieces.append((self._topics[r][1], scan))
         # The observers' copy: one sample for the whole team (bundle.py).

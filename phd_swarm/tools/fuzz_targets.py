@@ -31,12 +31,15 @@ The targets (:func:`targets`):
 from __future__ import annotations
 
 import functools
+import io
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
 from rclpy.serialization import serialize_message
 from rosidl_parser.definition import (
     AbstractNestedType,
@@ -48,7 +51,7 @@ from rosidl_parser.definition import (
 from phd_swarm.config import load_run_config
 from phd_swarm.config.sweep_spec import SpecError, load_spec
 from phd_swarm.core.registry import lookup, names
-from phd_swarm.logs.mcap_log import LogError, LogWriter, open_log
+from phd_swarm.logs.mcap_log import LogError, open_log
 from phd_swarm.nodes import bundle, cdr, convert, inbox
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm.nodes.wire import wire_for
@@ -181,7 +184,7 @@ def _all_kinds() -> set[str]:
 
 
 def _inbox_seeds() -> list[bytes]:
-    wire = _wires()["voronoi_phd"]
+    wire = max(_wires().values(), key=lambda w: len(w.types))  # the most kinds
     pieces = [(k, serialize_message(filled(t))) for k, t in wire.types.items()]
     return [inbox.pack_cdr(2, pieces[:1]), inbox.pack_cdr(0, pieces), inbox.pack_cdr(1, [])]
 
@@ -258,25 +261,35 @@ def _log_seeds() -> list[bytes]:
     """The first steps of :data:`SEED_LOG` (to its third clock), uncompressed.
 
     Small, so each run is quick, and a mutation lands in records rather than in compressed
-    chunks.
+    chunks. Copied record by record with the mcap library, each channel with the schema
+    recorded (an old log's definitions, not the installed ones).
     """
-    out = Path(tempfile.mkdtemp(prefix="phd_swarm_fuzz_seed_")) / "seed.mcap"
-    with open_log(SEED_LOG) as log:
-        meta = log.metadata()
-        with LogWriter(out, compression="none", chunk_size=16_384) as w:
-            for name, data in meta.items():
-                w.add_metadata(name, data)
-            clocks = 0
-            for rec in log.messages(decode=False):
-                clocks += rec.topic == "/clock"
-                if clocks > 3:
-                    break
-                w.add_channel(rec.topic, rec.ros_type)
-                w.write(rec.topic, rec.data, rec.log_time_ns, rec.publish_time_ns)
-    seeds = [out.read_bytes()]
-    out.unlink()
-    out.parent.rmdir()
-    return seeds
+    out = io.BytesIO()
+    writer = Writer(out, chunk_size=16_384, compression=CompressionType.NONE)
+    with open(SEED_LOG, "rb") as f:
+        reader = make_reader(f)
+        header = reader.get_header()
+        writer.start(header.profile, header.library)
+        for record in reader.iter_metadata():
+            writer.add_metadata(record.name, dict(record.metadata))
+        schemas: dict[int, int] = {}
+        channels: dict[int, int] = {}
+        clocks = 0
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            clocks += channel.topic == "/clock"
+            if clocks > 3:
+                break
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding,
+                                                            schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id],
+                    dict(channel.metadata))
+            writer.add_message(channels[channel.id], message.log_time, message.data,
+                               message.publish_time, message.sequence)
+    writer.finish()
+    return [out.getvalue()]
 
 
 @functools.cache

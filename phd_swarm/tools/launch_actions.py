@@ -145,10 +145,7 @@ def plan_from_arguments(values: Mapping[str, str], base_env: Mapping[str, str]) 
         robots_per_process=per, record=record, record_inboxes=record_inboxes,
         dds=values["dds"], discovery_server=values["discovery_server"],
         hosts=load_layout(values["hosts"]) if values.get("hosts") else None), base_env)
-    plan.rc.write_params(plan.params)
-    for path, text in plan.files.items():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+    plan.write_files()
     return plan
 
 

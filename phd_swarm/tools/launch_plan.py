@@ -27,6 +27,7 @@ from typing import Any
 
 from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.logs.mcap_log import LogError, read_metadata
+from phd_swarm.nodes.auth import write_key
 from phd_swarm.nodes.completeness import Completeness
 from phd_swarm.nodes.ros_params import ros_refusal
 from phd_swarm.nodes.topics import robot_namespace
@@ -85,6 +86,9 @@ RECORDER_STOP_GRACE = 30.0
 
 #: ROS_DOMAIN_ID of a run when the caller has none (as scripts/env.sh).
 DEFAULT_DOMAIN_ID = "42"
+
+#: The run's key in its folder (nodes/auth.py): made by whoever starts the run.
+KEY_FILE = "run.key"
 
 
 @dataclass(frozen=True)
@@ -375,6 +379,9 @@ class SwarmPlan:
         The hosts the processes are placed on (``--hosts``), None on this machine.
     files : dict
         Files to write before starting anything: each host's Fast DDS profile.
+    key : Path or None
+        The run's key to make before starting anything (``auth.write_key``, mode 0600), which
+        the shared parameter ``auth_key_file`` names; None if the config names its own.
     """
 
     rc: RunConfig
@@ -387,11 +394,21 @@ class SwarmPlan:
     world: NodeProcess
     hosts: HostLayout | None = None
     files: dict[Path, str] = field(default_factory=dict, repr=False)
+    key: Path | None = None
 
     @property
     def processes(self) -> tuple[NodeProcess, ...]:
         """Every process, in start order."""
         return (*self.observers, *self.robots, self.world)
+
+    def write_files(self) -> None:
+        """Write what the processes read before any starts: parameters, profiles, the key."""
+        self.rc.write_params(self.params)
+        for path, text in self.files.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+        if self.key is not None:
+            write_key(self.key)
 
     def env_changes(self, base: Mapping[str, str]) -> tuple[dict[str, str], list[str]]:
         """What :attr:`env` sets and unsets relative to ``base``: ``(set, unset)``."""
@@ -419,6 +436,10 @@ def swarm_plan(rc: RunConfig, run_dir: Path, options: SwarmOptions | None = None
     processes = -(-s.robots // per) + 2 + int(record)
     ready = ready_timeouts(rc, processes)
     params = run_dir / "config.yaml"
+    # A key of its own per run (nodes/auth.py), unless the config names one.
+    key = None if rc.param("robot", "auth_key_file") else run_dir / KEY_FILE
+    if key is not None:
+        rc = replace(rc, shared={**rc.shared, "auth_key_file": str(key)})
     rc = rc.with_overrides(
         world={"observers": observers + int(options.view), "ready_timeout": ready["world"]},
         robot={"observers": observers, "ready_timeout": ready["robot"]},
@@ -440,7 +461,7 @@ def swarm_plan(rc: RunConfig, run_dir: Path, options: SwarmOptions | None = None
                      observers=tuple(observer_processes(params, record)),
                      robots=tuple(robot_processes(s.robots, per, common,
                                                   options.robot_nice)),
-                     world=world_process(params))
+                     world=world_process(params), key=key)
     return plan if options.hosts is None else on_hosts(plan, options.hosts, per,
                                                        options.robot_nice)
 

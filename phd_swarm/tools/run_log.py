@@ -35,7 +35,7 @@ from __future__ import annotations
 import logging
 import re
 from collections import defaultdict
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -46,7 +46,7 @@ import yaml
 from rclpy.serialization import deserialize_message as _rclpy_deserialize
 
 from phd_swarm.config import RunConfig, load_run_config, run_config_from_dict
-from phd_swarm.logs.mcap_log import LogError, LogRecord, open_log
+from phd_swarm.logs.mcap_log import LogError, LogReader, LogRecord, open_log
 from phd_swarm.nodes import convert
 from phd_swarm.nodes import topics as T
 from phd_swarm.nodes.completeness import reporters
@@ -380,6 +380,25 @@ def deserialize(rec: LogRecord, cls: type, path: Path) -> Any:
                        f"version of phd_swarm?): {exc}") from None
 
 
+def _measurement_set(log: LogReader, rec: LogRecord, path: Path,
+                     legacy: dict[str, Callable[[bytes], Any]]) -> Any:
+    """A recorded ``MeasurementSet``, read by the installed type.
+
+    A log recorded before its ``mac`` field (issue 40) is read by the definition recorded
+    in it.
+    """
+    if rec.topic not in legacy:
+        try:
+            return deserialize(rec, MeasurementSet, path)
+        except LogError:
+            legacy[rec.topic] = log.recorded_decoder(rec.topic)
+    try:
+        return legacy[rec.topic](rec.data)
+    except Exception as exc:  # mcap_ros2's decoders raise struct, index, value errors
+        raise LogError(f"{path}: a {rec.ros_type} message on {rec.topic} cannot be read by "
+                       f"its recorded definition either: {exc}") from None
+
+
 def _xy(points, what: str, path: Path, k: int) -> np.ndarray:
     try:
         return convert.xy(points, what)
@@ -418,6 +437,7 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
             return steps.setdefault(k, StepRecord(k))
 
         cells: dict[int, list[tuple[int, np.ndarray]]] = defaultdict(list)
+        legacy: dict[str, Callable[[bytes], Any]] = {}
         team_seen: set[int] = set()
         truth_seen: set[int] = set()
         topics = [T.WORLD_TRUTH, T.WORLD_ROBOTS, T.MONITOR_METRICS]
@@ -461,7 +481,7 @@ def load_run(path: str | Path, config: str | Path | None = None) -> RunLog:
                     cells[int(m.robot_id)].append(
                         (int(m.step), _xy(m.vertices, "cell vertices", path, m.step)))
                 else:
-                    m = deserialize(rec, MeasurementSet, path)
+                    m = _measurement_set(log, rec, path, legacy)
                     sensor = np.array([m.sensor_position.x, m.sensor_position.y])
                     at(int(m.step)).scans[int(m.robot_id)] = (
                         sensor, _xy(m.measurements, "measurements", path, m.step))

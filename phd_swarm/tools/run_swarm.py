@@ -210,10 +210,7 @@ def run(opts: argparse.Namespace) -> int:
         hosts=None if opts.hosts is None else load_layout(opts.hosts),
         view=view_observes))
     rc = plan.rc
-    rc.write_params(plan.params)
-    for path, text in plan.files.items():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+    plan.write_files()
     use_server = plan.use_server
     env = dict(plan.env)
     # Its children get ``env`` as it is when each starts.
@@ -465,10 +462,12 @@ def _report(run_dir: Path, rc: RunConfig, wall: float, interrupted: bool,
             cpu: dict[str, float], memory: dict[str, float],
             stepping_figures: dict[str, object]) -> int:
     path = run_dir / "summary.json"
-    if not path.exists():
-        print(f"run_swarm: no summary was written (see {run_dir}/logs/)", file=sys.stderr)
+    try:
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:  # none, or cut short (a full disk)
+        print(f"run_swarm: no summary was written (see {run_dir}/logs/)"
+              + ("" if isinstance(exc, FileNotFoundError) else f": {exc}"), file=sys.stderr)
         return 130 if interrupted else 1
-    summary = json.loads(path.read_text())
     if "failure" in summary and not summary.get("steps"):
         # The monitor wrote none: the summary is run_swarm's, the failure and what it knows.
         print(f"run_swarm: failed: {summary.get('failure')}; no step was summarised; what "

@@ -35,19 +35,19 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.full]
 
 
 def _start(children, out: Path, name: str):
-    """A 3-robot run of 1000 steps with progress every 2 steps, into ``out/name``."""
+    """A 3-robot run of 4000 steps with progress every 2 steps, into ``out/name``."""
     config = out / "progress.yaml"
     config.write_text(CONFIG.read_text().replace("progress_every: 20", "progress_every: 2"))
     return children.start([RUN_SWARM, str(config), "--robots", "3", "--targets", "10",
-                           "--duration", "500", "--seed", "3", "--out", str(out),
+                           "--duration", "2000", "--seed", "3", "--out", str(out),
                            "--name", name])
 
 
 def _kill_mid_run(children, tmp_path: Path, module: str) -> tuple[Path, str, float]:
-    """Start a run, SIGKILL its ``module`` process after step 6; (run dir, stderr, s to end)."""
+    """Start a run, SIGKILL its ``module`` process after step 7; (run dir, stderr, s to end)."""
     proc = _start(children, tmp_path, "run")
     run = tmp_path / "run"
-    wait_for_text(run / "logs" / "monitor.log", "step 6/", proc)
+    wait_for_text(run / "logs" / "monitor.log", "step 7/", proc)
     (pid,) = run_pids(run, module)
     os.kill(pid, signal.SIGKILL)
     killed = time.monotonic()
@@ -152,7 +152,7 @@ def test_a_disk_that_fills_mid_run_stops_it_with_what_was_written_intact(childre
                                                                          small_disk):
     proc = _start(children, small_disk, "run")
     run = small_disk / "run"
-    wait_for_text(run / "logs" / "monitor.log", "step 6/", proc)
+    wait_for_text(run / "logs" / "monitor.log", "step 7/", proc)
     free = os.statvfs(small_disk)
     left = free.f_bavail * free.f_frsize
     with open(small_disk / "ballast", "wb") as f:  # all but 256 kB: a few chunks more
