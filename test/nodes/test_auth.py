@@ -39,7 +39,6 @@ def test_a_sealed_envelope_is_a_valid_inbox_message_with_its_mac():
     lambda d: d[:8] + bytes([d[8] ^ 1]) + d[9:],                      # a bit changed
     lambda d: d[:-1],                                                 # cut
     lambda d: d + b"\0\0\0\0",                                        # grown
-    lambda d: serialize_message(deserialize_message(d, InboxMessage)),  # rclpy's re-writing
 ])
 def test_anything_but_the_senders_exact_bytes_is_unauthenticated(forge):
     data = forge(_envelope(KEY))
