@@ -245,3 +245,22 @@ def test_bench_fuzz_quick_runs_each_target_and_reports_executions(tmp_path):
 def test_bench_fuzz_rejects_an_unknown_target():
     result = _bench("fuzz", "--quick", "--targets", "nothing_like_it", timeout=120)
     assert result.returncode != 0 and "no target starts with 'nothing_like_it'" in result.stderr
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+@pytest.mark.full
+def test_bench_soak_quick_samples_every_process_and_gives_the_slopes(tmp_path):
+    stdout, data = _quick_results("soak", tmp_path, "--sample-s", "1", timeout=600)
+    (result,) = data["results"]
+    figures, samples = result["figures"], result["samples"]
+    assert data["meta"]["robots"] == 4 and data["meta"]["steps"] == 240
+    assert data["meta"]["log_complete"] is True
+    assert {"world", "monitor", "recorder", "robot_0", "robot_3", "/dev/shm"} <= set(figures)
+    assert len(samples) >= 5 and all(len(s["processes"]) == 7 for s in samples[2:])
+    for name in ("world", "robot_0"):
+        f = figures[name]
+        assert f["rss_mb_end"] > 20 and f["cpu_ms_per_step_q2"] > 0
+        assert f["rss_mb_per_sim_hour"] == f["rss_mb_per_sim_hour"]  # a number, not NaN
+    assert (tmp_path / "soak-" f"{data['meta']['date']}-rss.png").exists()
+    assert "/dev/shm entries" in stdout
