@@ -4,14 +4,15 @@ Run with ``scripts/bench.sh soak [--sim-minutes 60] [--robots 20] [--sample-s 2]
 [--quick]``. Runs ``scripts/run_swarm.sh config/dames_static.yaml`` (a process per robot,
 lockstep, the recorder on) for ``--sim-minutes`` of sim time, and every ``--sample-s``
 wall seconds samples, for every process of the run (world, monitor, recorder, each
-robot): its resident memory (VmRSS), its open files (``/proc/PID/fd``) and its CPU time,
-with the step the monitor last reported and the entries in ``/dev/shm`` (Fast DDS's
-shared-memory segments and locks). Then, after the warm-up (the first ``--warmup`` of the
-steps), per process:
+robot): its resident memory (VmRSS), its open files (``/proc/PID/fd``), its CPU time and
+the ``/dev/shm`` files it maps (Fast DDS's shared-memory segments), with the step the
+monitor last reported and all entries in ``/dev/shm`` (other runs' too: soak alone).
+Then, after the warm-up (the first ``--warmup`` of the steps), per process:
 
 - ``rss_mb_per_sim_hour``: the least-squares slope of RSS over sim time (target: < 1 MB
   per process per sim-hour);
-- ``fds_per_sim_hour``: the same for open files;
+- ``fds_per_sim_hour``, ``shm_mapped_per_sim_hour``: the same for open files and mapped
+  shared-memory files;
 - ``cpu_ms_per_step``: CPU per step between samples, its mean in the second and the last
   quarter of the run, and their ratio (flat: within noise of 1);
 
@@ -63,17 +64,19 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     return opts
 
 
-def _proc_figures(pid: int) -> tuple[float, int, float] | None:
-    """(RSS [MB], open files, CPU [s]) of process ``pid``, or None if it is gone."""
+def _proc_figures(pid: int) -> tuple[float, int, float, int] | None:
+    """(RSS [MB], open files, CPU [s], /dev/shm files mapped) of ``pid``; None if gone."""
     try:
         status = Path(f"/proc/{pid}/status").read_text()
         fds = len(os.listdir(f"/proc/{pid}/fd"))
         fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        maps = Path(f"/proc/{pid}/maps").read_text()
     except (OSError, IndexError):
         return None
     rss = int(re.search(r"VmRSS:\s+(\d+) kB", status).group(1)) / 1024
     cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-    return rss, fds, cpu
+    shm = len(set(re.findall(r"(/dev/shm/\S+)", maps)))
+    return rss, fds, cpu, shm
 
 
 def _pids(run: Path, robots: int) -> dict[str, int]:
@@ -123,7 +126,7 @@ def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
                 fig = _proc_figures(pid)
                 if fig is not None:
                     row["processes"][name] = {"rss_mb": round(fig[0], 2), "fds": fig[1],
-                                              "cpu_s": fig[2]}
+                                              "cpu_s": fig[2], "shm_mapped": fig[3]}
             samples.append(row)
     finally:
         if proc.poll() is None:
@@ -149,6 +152,7 @@ def figures(samples: list[dict], steps: int, dt: float, warmup: float) -> dict[s
         sim_h = step * dt / 3600.0
         rss = np.array([p["rss_mb"] for _, p in rows])
         fds = np.array([p["fds"] for _, p in rows], dtype=float)
+        shm = np.array([p.get("shm_mapped", 0) for _, p in rows], dtype=float)
         cpu = np.array([p["cpu_s"] for _, p in rows])
         dk = np.diff(step)
         ok = dk > 0
@@ -166,6 +170,7 @@ def figures(samples: list[dict], steps: int, dt: float, warmup: float) -> dict[s
                      "rss_mb_end": round(float(rss[-1]), 1) if rss.size else None,
                      "rss_mb_per_sim_hour": round(_slope(sim_h, rss), 3),
                      "fds_per_sim_hour": round(_slope(sim_h, fds), 3),
+                     "shm_mapped_per_sim_hour": round(_slope(sim_h, shm), 3),
                      "cpu_ms_per_step_q2": second, "cpu_ms_per_step_q4": last,
                      "cpu_ratio_q4_q2": round(last / second, 3) if second else None}
     sim_h = np.array([s["step"] * dt / 3600.0 for s in kept])

@@ -261,6 +261,7 @@ def test_bench_soak_quick_samples_every_process_and_gives_the_slopes(tmp_path):
     for name in ("world", "robot_0"):
         f = figures[name]
         assert f["rss_mb_end"] > 20 and f["cpu_ms_per_step_q2"] > 0
+        assert samples[-1]["processes"][name]["shm_mapped"] >= 0
         assert f["rss_mb_per_sim_hour"] == f["rss_mb_per_sim_hour"]  # a number, not NaN
     assert (tmp_path / "soak-" f"{data['meta']['date']}-rss.png").exists()
     assert "/dev/shm entries" in stdout
