@@ -73,7 +73,10 @@ def _proc_figures(pid: int) -> tuple[float, int, float, int] | None:
         maps = Path(f"/proc/{pid}/maps").read_text()
     except (OSError, IndexError):
         return None
-    rss = int(re.search(r"VmRSS:\s+(\d+) kB", status).group(1)) / 1024
+    found = re.search(r"VmRSS:\s+(\d+) kB", status)
+    if found is None:  # a zombie: exited, not yet reaped
+        return None
+    rss = int(found.group(1)) / 1024
     cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
     shm = len(set(re.findall(r"(/dev/shm/\S+)", maps)))
     return rss, fds, cpu, shm

@@ -257,11 +257,13 @@ def test_bench_soak_quick_samples_every_process_and_gives_the_slopes(tmp_path):
     assert data["meta"]["robots"] == 4 and data["meta"]["steps"] == 240
     assert data["meta"]["log_complete"] is True
     assert {"world", "monitor", "recorder", "robot_0", "robot_3", "/dev/shm"} <= set(figures)
-    assert len(samples) >= 5 and all(len(s["processes"]) == 7 for s in samples[2:])
+    # Every process in every sample while stepping (not while the run starts or stops).
+    middle = samples[len(samples) // 3: 2 * len(samples) // 3]
+    assert len(middle) >= 2 and all(len(s["processes"]) == 7 for s in middle)
     for name in ("world", "robot_0"):
         f = figures[name]
         assert f["rss_mb_end"] > 20 and f["cpu_ms_per_step_q2"] > 0
-        assert samples[-1]["processes"][name]["shm_mapped"] >= 0
+        assert middle[-1]["processes"][name]["shm_mapped"] > 0  # Fast DDS shared memory
         assert f["rss_mb_per_sim_hour"] == f["rss_mb_per_sim_hour"]  # a number, not NaN
     assert (tmp_path / "soak-" f"{data['meta']['date']}-rss.png").exists()
     assert "/dev/shm entries" in stdout
