@@ -17,7 +17,8 @@ deep queue so that a burst is never overwritten before the executor takes it.
   ones (issue 15: a KEEP_LAST 8 writer lost 1-2 % of the step messages of a 20-robot run
   under load). Transient-local lets a reader that matches a little late still get the
   steps written before. Acknowledged samples stay in the writer's history for late
-  joiners; one run writes at most a few thousand per topic.
+  joiners, up to Fast DDS's 5,000 per writer: a run of more steps holds that many per step
+  topic (the hour's soak, docs/benchmarks.md: the monitor's team PHD alone ~350 MB).
 - ``LATCHED`` (state a late joiner must see and nothing more): reliable + transient-local,
   depth 1: the occupancy-grid views of the PHD (``/monitor/density_grid``,
   ``/robot_<id>/density_grid``), as RViz2's Map display (transient-local by default) and
