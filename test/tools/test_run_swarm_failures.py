@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import struct
 import subprocess
 import time
 from pathlib import Path
@@ -69,8 +70,8 @@ def _readable(log: Path) -> int:
         try:
             for record in StreamReader(f, validate_crcs=True).records:
                 theirs += type(record).__name__ == "Message"
-        except (McapError, EOFError, ValueError):
-            pass  # the cut: what came before it was read
+        except (McapError, EOFError, ValueError, struct.error):
+            pass  # the cut (in a record's header: struct.error): what came before was read
     assert ours == theirs and ours > 0
     return ours
 
@@ -160,9 +161,11 @@ def test_a_disk_that_fills_mid_run_stops_it_with_what_was_written_intact(childre
     out, err = proc.communicate(timeout=180.0)
     assert proc.returncode == EXIT_PROCESS_DIED, f"{out}\n{err}"
     assert "the recorder exited with code 1" in err
-    assert "No space left on device" in (run / "logs" / "recorder.log").read_text()
+    # (Its "No space left on device" may not reach recorder.log: that disk is full too.)
     for m in MODULES:
         assert run_pids(run, m) == [], m
     (small_disk / "ballast").unlink()  # room to read and check what was written
+    with open_log(run / "run.mcap") as log:
+        assert log.truncated  # stopped inside a chunk's write
     assert _readable(run / "run.mcap") > 0
     assert (run / "config.yaml").exists()
