@@ -111,7 +111,8 @@ def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
            str(opts.seed), "--out", str(where), "--name", "soak", "--quiet"]
     run = where / "soak"
     monitor_log = run / "logs" / "monitor.log"
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, start_new_session=True)
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, start_new_session=True, env=env)
     samples: list[dict] = []
     pids: dict[str, int] = {}
     started = time.monotonic()
@@ -131,10 +132,14 @@ def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
                     row["processes"][name] = {"rss_mb": round(fig[0], 2), "fds": fig[1],
                                               "cpu_s": fig[2], "shm_mapped": fig[3]}
             samples.append(row)
-    finally:
+    finally:  # stopped by PID (its process group), whatever happened
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGINT)
-            proc.wait(timeout=120)
+            try:
+                proc.wait(timeout=120)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
     if proc.returncode != 0:
         raise SystemExit(f"soak: run_swarm exited with code {proc.returncode}; see {run}/logs")
     return samples, json.loads((run / "summary.json").read_text())
