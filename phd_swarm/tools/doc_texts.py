@@ -215,7 +215,10 @@ other's contact, at N (N - 1) inbox writers instead of 6 N (N - 1)
 ([decisions](decisions.md)). Inbox writers are reliable and transient-local with a short
 history, so the first message of a publisher created a moment ago is not lost: it is
 delivered when the new publisher matches the inbox's subscription. Readers keep a deep queue
-so that a burst is never overwritten before the executor takes it.
+so that a burst is never overwritten before the executor takes it. In a run with a key
+(`auth_key_file`; `run_swarm.sh` makes one per run) the message ends with `mac`, an
+HMAC-SHA256 of its bytes under the key, and a robot rejects an envelope without the right
+one, as it does a measurement set on `/robot_<i>/measurements` ([ros](ros.md)).
 
 {inbox_table}
 

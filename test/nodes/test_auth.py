@@ -139,3 +139,24 @@ def _forge(ros, victim, dt):
                                           np.array([[21.0, 21.0]]), key))
     assert ros.spin_until(lambda: victim.rejections["unauthenticated"] == 4,
                           timeout=10.0), dict(victim.rejections)
+
+
+@pytest.mark.ros
+def test_a_robot_refuses_a_key_file_others_can_read(tmp_path):
+    from rclpy.parameter import Parameter
+
+    from phd_swarm.config import RunConfig
+    from phd_swarm.nodes.robot import RobotNode
+    from phd_swarm.nodes.ros_params import ParameterError
+    from phd_swarm.testing import InProcessRos, small_static_scenario
+
+    key = auth.write_key(tmp_path / "run.key")
+    os.chmod(key, 0o644)
+    params = RunConfig(small_static_scenario(robots=2), {"auth_key_file": str(key)}
+                       ).write_params(tmp_path / "params.yaml")
+    with InProcessRos() as ros, pytest.raises(
+            ParameterError, match=r"robot: parameter auth_key_file: .*run.key: the run's key "
+                                  r"is readable by others \(mode 644\)"):
+        RobotNode(context=ros.context, namespace="/robot_0",
+                  cli_args=["--ros-args", "--params-file", str(params)],
+                  parameter_overrides=[Parameter("robot_id", value=0)])
