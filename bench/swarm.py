@@ -165,7 +165,9 @@ def main(argv: list[str] | None = None) -> int:
     if set(starts) - {"spread", "crowded"}:
         parser.error(f"--starts: spread, crowded; got {opts.starts!r}")
     per_group = 2 if opts.quick else opts.per_group
-    duration = 5.0 if opts.quick else opts.duration
+    # 60 steps: the stepping window must span many of run_swarm's 0.2 s CPU samples (with
+    # 10 steps it fit in one, and the observers' CPU while stepping read 0).
+    duration = 30.0 if opts.quick else opts.duration
     record = opts.record or opts.quick
     domain = int(os.environ.get("ROS_DOMAIN_ID", "42"))
     rows = []

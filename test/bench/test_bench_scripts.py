@@ -186,7 +186,7 @@ def test_bench_swarm_quick_runs_every_layout_with_a_complete_log(tmp_path):
         ("one process per robot", 4), ("2 robots per process", 2),
         ("all robots in one process", 1)]
     for r in rows:
-        assert r["robots"] == 4 and r["steps"] == 10 and r["dead_robots"] == []
+        assert r["robots"] == 4 and r["steps"] == 60 and r["dead_robots"] == []
         assert r["log_complete"] is True and r["cpu_ms_per_robot_step"] > 0
         assert 20 < r["peak_memory_mb_robot_process"] <= r["peak_memory_mb_per_process"] < 2000
         # Start-up and the CPU while stepping, robots and observers apart.
