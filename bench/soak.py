@@ -6,8 +6,11 @@ lockstep, the recorder on) for ``--sim-minutes`` of sim time, and every ``--samp
 wall seconds samples, for every process of the run (world, monitor, recorder, each
 robot): its resident memory (VmRSS), its open files (``/proc/PID/fd``), its CPU time and
 the ``/dev/shm`` files it maps (Fast DDS's shared-memory segments), with the step the
-monitor last reported and all entries in ``/dev/shm`` (other runs' too: soak alone).
-Then, after the warm-up (the first ``--warmup`` of the steps), per process:
+monitor last reported, whether the world was still stepping (its log has no "world:
+done" yet; the monitor may lag behind the world, and after the world is done the team
+exits) and all entries in ``/dev/shm`` (other runs' too: soak alone). Then, from the
+samples taken while stepping, after the warm-up (the first ``--warmup`` of the steps),
+per process:
 
 - ``rss_mb_per_sim_hour``: the least-squares slope of RSS over sim time (target: < 1 MB
   per process per sim-hour);
@@ -38,6 +41,7 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
+from phd_swarm.nodes.world import DONE_LINE
 from phd_swarm.testing import run_pids
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -103,6 +107,13 @@ def _last_step(monitor_log: Path) -> int:
     return int(found[-1]) if found else -1
 
 
+def _world_done(world_log: Path) -> bool:
+    try:
+        return DONE_LINE.encode() in world_log.read_bytes()[-4096:]
+    except OSError:
+        return False
+
+
 def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
     """Run and sample; (samples, summary.json)."""
     duration = opts.sim_minutes * 60.0
@@ -111,6 +122,7 @@ def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
            str(opts.seed), "--out", str(where), "--name", "soak", "--quiet"]
     run = where / "soak"
     monitor_log = run / "logs" / "monitor.log"
+    world_log = run / "logs" / "world.log"
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, start_new_session=True, env=env)
     samples: list[dict] = []
@@ -121,10 +133,12 @@ def soak(opts: argparse.Namespace, where: Path) -> tuple[list[dict], dict]:
             time.sleep(opts.sample_s)
             if len(pids) < opts.robots + len(OBSERVERS):
                 pids = _pids(run, opts.robots)
+            stepping = not _world_done(world_log)
             step = _last_step(monitor_log)
             if step < 1:
                 continue
             row = {"t_wall": round(time.monotonic() - started, 2), "step": step,
+                   "stepping": stepping,
                    "shm_entries": len(os.listdir("/dev/shm")), "processes": {}}
             for name, pid in pids.items():
                 fig = _proc_figures(pid)
@@ -151,7 +165,7 @@ def _slope(x: np.ndarray, y: np.ndarray) -> float:
 
 def figures(samples: list[dict], steps: int, dt: float, warmup: float) -> dict[str, dict]:
     """Per process: the slopes of RSS and open files, CPU per step by quarter."""
-    kept = [s for s in samples if s["step"] >= warmup * steps]
+    kept = [s for s in samples if s["step"] >= warmup * steps and s.get("stepping", True)]
     names = sorted({n for s in kept for n in s["processes"]})
     out: dict[str, dict] = {}
     for name in names:
