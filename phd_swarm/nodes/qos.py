@@ -10,15 +10,19 @@ deep queue so that a burst is never overwritten before the executor takes it.
   matters for equality with the centralised filter.
 - ``STEP`` (every message written once per step: measurement sets, poses, statuses, cells,
   goals, estimates, density grids, truth, team state, metrics, the team PHD): reliable,
-  transient-local, **keep-all** on both sides. A keep-all writer never overwrites a sample
-  that a matched reader has not acknowledged (it blocks instead, up to Fast DDS's resource
-  limit of 5,000 samples), and a keep-all reader never drops one it has not handed to the
-  executor, so a slow recorder or monitor gets every step instead of losing the oldest
-  ones (issue 15: a KEEP_LAST 8 writer lost 1-2 % of the step messages of a 20-robot run
-  under load). Transient-local lets a reader that matches a little late still get the
-  steps written before. Acknowledged samples stay in the writer's history for late
-  joiners, up to Fast DDS's 5,000 per writer: a run of more steps holds that many per step
-  topic (the hour's soak, docs/benchmarks.md: the monitor's team PHD alone ~350 MB).
+  transient-local; the reader **keep-all**, the writer keep-last :data:`STEP_HISTORY`.
+  A keep-all reader never drops a sample it has not handed to the executor, so a slow
+  recorder or monitor gets every step instead of losing the oldest ones (issue 15: with
+  KEEP_LAST 8 on both sides a 20-robot run lost 1-2 % of its step messages); it
+  acknowledges a sample when the sample is in its queue, not when the executor takes it.
+  The writer keeps the last :data:`STEP_HISTORY` samples for repairs and for a reader
+  that matches a little late: a sample a reader lost in transport is re-sent from there
+  when the reader asks (Fast DDS heartbeats every 3 s), long before it is 512 samples old
+  (4 minutes of a 2 Hz run, 20 s of the fastest lockstep runs), and a run's readers match
+  before step 0 (robots and the recorder wait for them). The writer was keep-all until
+  issue 40, which Fast DDS bounds only by 5,000 samples per writer: acknowledged samples
+  stayed for late joiners, and every process grew for the first 5,000 steps of a run (the
+  hour's soak, docs/benchmarks.md: the monitor by ~350 MB, its team PHD alone).
 - ``LATCHED`` (state a late joiner must see and nothing more): reliable + transient-local,
   depth 1: the occupancy-grid views of the PHD (``/monitor/density_grid``,
   ``/robot_<id>/density_grid``), as RViz2's Map display (transient-local by default) and
@@ -62,7 +66,10 @@ PROTOCOL = _profile(1000, DurabilityPolicy.VOLATILE)
 INBOX_PUB = _profile(64, DurabilityPolicy.TRANSIENT_LOCAL)
 INBOX_SUB = _profile(1000, DurabilityPolicy.TRANSIENT_LOCAL)
 
-STEP_PUB = _keep_all(DurabilityPolicy.TRANSIENT_LOCAL)
+#: Samples a step writer keeps (see ``STEP`` above): bounded memory, room for repairs.
+STEP_HISTORY = 512
+
+STEP_PUB = _profile(STEP_HISTORY, DurabilityPolicy.TRANSIENT_LOCAL)
 STEP_SUB = _keep_all(DurabilityPolicy.TRANSIENT_LOCAL)
 
 LATCHED = _profile(1, DurabilityPolicy.TRANSIENT_LOCAL)
