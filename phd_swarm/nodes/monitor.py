@@ -53,6 +53,8 @@ from phd_swarm.nodes.markers import marker_size, team_markers_cdr
 from phd_swarm.nodes.observe import TeamReader, add_windows, union
 from phd_swarm.nodes.qos import publisher_qos, subscription_qos
 from phd_swarm.nodes.ros_params import declare, declare_scenario
+from phd_swarm.nodes.step_series import StepSeries
+from phd_swarm.nodes.step_sets import Timeline
 from phd_swarm_msgs.msg import (
     CellPolygon,
     DensityGrid,
@@ -97,14 +99,15 @@ class MonitorNode(Node):
         self.frame_id = self.params["world_frame_id"]
         self.keep_images = keep_images
         self.images: dict[int, np.ndarray] = {}
-        self.series: list[dict[str, Any]] = []
+        self.series = StepSeries()
         self.done = False
         self.finished = False
         self.rejected = 0
         #: Messages each robot rejected so far (its statuses' ``rejected_messages``).
         self.robots_rejected: dict[int, int] = {}
         self.truth: dict[int, np.ndarray] = {}
-        self.alive: dict[int, frozenset[int]] = {}
+        #: Robots alive at each team state's step, stored where it changes.
+        self.alive: Timeline = Timeline()
         #: What a robot's step is made of and how the team's is joined: the estimator's
         #: declared observation (:mod:`phd_swarm.nodes.observe`).
         self.reader = TeamReader(self.scenario.system)
@@ -383,7 +386,7 @@ class MonitorNode(Node):
     def summary(self) -> dict[str, Any]:
         """The run's summary (DESIGN.md "Outputs of a run") from the steps processed so far."""
         s = self.scenario
-        final_alive = self.alive.get(max(self.alive)) if self.alive else frozenset()
+        final_alive = self.alive.get(self.alive.last) if self.alive else frozenset()
         final_alive = set(final_alive or ())
         dead = set(range(s.robots)) - final_alive
         for rid in final_alive:
@@ -441,7 +444,8 @@ class MonitorNode(Node):
 GRID_MARKERS_EVERY = 100
 
 
-def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, float | None]:
+def figure_means(series: StepSeries | list[dict[str, Any]], names: list[str]
+                 ) -> dict[str, float | None]:
     """The mean over steps of each figure ``names`` of the rows (NaN steps left out).
 
     The system's own figures (e.g. Sung & Tokekar's ``components``, ``tracks``,
@@ -449,7 +453,8 @@ def figure_means(series: list[dict[str, Any]], names: list[str]) -> dict[str, fl
     """
     out: dict[str, float | None] = {}
     for name in names:
-        values = np.array([r.get(name, np.nan) for r in series], dtype=float)
+        values = (series.column(name) if isinstance(series, StepSeries)
+                  else np.array([r.get(name, np.nan) for r in series], dtype=float))
         values = values[np.isfinite(values)]
         out[name] = float(values.mean()) if values.size else None
     return out

@@ -96,6 +96,7 @@ from phd_swarm.nodes.record_topics import (
 )
 from phd_swarm.nodes.reporter import DiagnosticsReporter
 from phd_swarm.nodes.ros_params import ParameterError, declare
+from phd_swarm.nodes.step_sets import StepSet, Timeline
 from phd_swarm.nodes.team_routes import TeamRoutes, status_state
 from phd_swarm_msgs.msg import RobotStatus, TeamState
 
@@ -170,8 +171,9 @@ class Recorder(Node):
         self._step_topics: frozenset[str] = frozenset()
         #: A robot's topics by relative name: its system's with a config, else the common.
         self._robot_table: dict[str, tuple[str, ...]] = dict(T.ROBOT_TOPICS)
-        self._steps: dict[str, set[int]] = defaultdict(set)
-        self._team: dict[int, np.ndarray] = {}
+        #: Both in memory of their gaps and changes (:mod:`phd_swarm.nodes.step_sets`).
+        self._steps: dict[str, StepSet] = defaultdict(StepSet)
+        self._team: Timeline = Timeline.flags()
         self.report: completeness.Completeness | None = None
         #: Step messages missing so far, for /diagnostics (with a run config).
         self._gaps: GapCounter | None = None
