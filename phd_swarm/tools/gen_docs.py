@@ -38,7 +38,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from rclpy.qos import QoSProfile
+from rclpy.qos import HistoryPolicy, QoSProfile
 
 from phd_swarm.config import flatten, scenario_to_dict
 from phd_swarm.core import registry
@@ -136,10 +136,14 @@ def documented_topics(plugins: Sequence[str] = ()
     return team + own[:-1] + declared + own[-1:]
 
 
+def _history(p: QoSProfile) -> str:
+    return "keep all" if p.history == HistoryPolicy.KEEP_ALL else f"depth {p.depth}"
+
+
 def _depths(writer: QoSProfile, reader: QoSProfile) -> str:
-    if writer.depth == reader.depth:
-        return f"depth {writer.depth}"
-    return f"depth {writer.depth} (writer) / {reader.depth} (reader)"
+    if _history(writer) == _history(reader):
+        return _history(writer)
+    return f"{_history(writer)} (writer) / {_history(reader)} (reader)"
 
 
 def qos_summary(name: str) -> str:

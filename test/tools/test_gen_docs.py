@@ -74,8 +74,10 @@ def test_a_target_field_shows_only_for_the_presets_whose_kind_uses_it():
 
 def test_qos_summary_resolves_writer_and_reader():
     assert gen_docs.qos_summary("INBOX") == \
-        "reliable, transient local, depth 64 (writer) / 1000 (reader)"
+        "reliable, transient local, depth 64 (writer) / depth 1000 (reader)"
     assert gen_docs.qos_summary("LATCHED") == "reliable, transient local, depth 1"
+    assert gen_docs.qos_summary("STEP") == \
+        "reliable, transient local, depth 512 (writer) / keep all (reader)"
 
 
 def test_check_finds_stale_and_missing_files(tmp_path):
