@@ -3,6 +3,10 @@
 Crash safety: every finished chunk goes to the operating system at once (no buffering in the
 process), so a writer killed with SIGKILL, or one whose disk fills, leaves a file whose
 complete chunks can be read.
+
+Memory: the chunk indexes the summary needs are packed as each chunk is finished
+(:mod:`phd_swarm.logs.packed_index`), so a long run's writer holds ~10 bytes per channel
+and chunk until close.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
 
 from phd_swarm import __version__
 from phd_swarm.logs.log_format import MESSAGE_ENCODING, PROFILE, SCHEMA_ENCODING, LogError
+from phd_swarm.logs.packed_index import pack_new_chunk_indexes
 from phd_swarm.logs.schemas import installed_type_hash, message_definition
 
 _COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
@@ -32,6 +37,8 @@ class _DirectFile:
     def __init__(self, path: Path) -> None:
         self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         self._pos = 0
+        #: Writes so far (the writer writes when it finishes a chunk).
+        self.writes = 0
 
     def write(self, data: bytes) -> int:
         view = memoryview(data)
@@ -39,6 +46,7 @@ class _DirectFile:
             n = os.write(self._fd, view)
             view = view[n:]
         self._pos += len(data)
+        self.writes += 1
         return len(data)
 
     def tell(self) -> int:
@@ -95,6 +103,10 @@ class LogWriter:
         self.failure: str | None = None
         #: Messages written so far.
         self.message_count = 0
+        #: Chunk indexes packed so far (:func:`pack_new_chunk_indexes`), and the file's
+        #: writes when they were.
+        self._packed = 0
+        self._writes_packed = 0
 
     @property
     def closed(self) -> bool:
@@ -148,6 +160,9 @@ class LogWriter:
         except OSError as exc:
             raise self._failed(exc) from None
         self.message_count += 1
+        if self._file.writes != self._writes_packed:  # a chunk was finished: pack its index
+            self._writes_packed = self._file.writes
+            self._packed = pack_new_chunk_indexes(self._writer, self._packed)
 
     def _failed(self, exc: OSError) -> LogError:
         """The error for a write the OS refused (a full disk); the log takes no more.
