@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Benchmarks: `scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery|sweep-cluster|view|fuzz|auth|soak [--quick]`. Sets up if needed; prints the
+# Benchmarks: `scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery|sweep-cluster|view|fuzz|auth|soak|floor [--quick]`. Sets up if needed; prints the
 # figures and writes them as JSON under bench/results/. `estimators` runs in the benchmark-only .venv-bench with
 # Stone Soup (scripts/bench_stonesoup_setup.sh), or from .venv without it given --no-stonesoup.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery|sweep-cluster|view|fuzz|auth|soak [--quick] [options]" >&2; exit 2; }
+usage() { echo "usage: scripts/bench.sh core|comms|swarm|engines|recorder|estimators|sung|shirsat|papaioannou|discovery|sweep-cluster|view|fuzz|auth|soak|floor [--quick] [options]" >&2; exit 2; }
 [ $# -ge 1 ] || usage
 what="$1"; shift
 if [ "$what" = view ]; then "$ROOT/scripts/setup.sh" --with-view >/dev/null
@@ -28,6 +28,7 @@ case "$what" in
   fuzz) exec python3 "$ROOT/bench/fuzz.py" "$@" ;;
   auth) exec python3 "$ROOT/bench/auth.py" "$@" ;;
   soak) exec python3 "$ROOT/bench/soak.py" "$@" ;;
+  floor) exec python3 "$ROOT/bench/floor.py" "$@" ;;
   papaioannou) OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 exec python3 "$ROOT/bench/papaioannou.py" "$@" ;;
   estimators) if [[ " $* " == *" --no-stonesoup "* ]]; then py=python; else py="$("$ROOT/scripts/bench_stonesoup_setup.sh")"; fi; exec "$py" "$ROOT/bench/estimators.py" "$@" ;;
   *) usage ;;

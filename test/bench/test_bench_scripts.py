@@ -270,3 +270,21 @@ def test_bench_soak_quick_samples_every_process_and_gives_the_slopes(tmp_path):
         assert f["rss_mb_per_sim_hour"] == f["rss_mb_per_sim_hour"]  # a number, not NaN
     assert (tmp_path / "soak-" f"{data['meta']['date']}-rss.png").exists()
     assert "/dev/shm entries" in stdout
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_floor_quick_steps_the_message_pattern_with_no_work(tmp_path):
+    stdout, data = _quick_results("floor", tmp_path, timeout=300)
+    rows = data["results"]
+    assert [r["robots"] for r in rows] == [4]
+    for r in rows:
+        assert r["steps"] == 10 and r["robots_completed"] == r["robots"]
+        assert r["exited"] == r["processes"] == r["robots"] + 2, r["stuck"]
+        assert r["robot_cpu_ms_per_robot_step"] > 0 and r["steps_per_s"] > 0
+        assert 0 < r["startup_s"] and 20 < r["robot_peak_rss_mb"] < 2000
+        # Every status and bundle reached the observer (reliable, keep-all readers).
+        expected = r["robots"] * r["steps"]
+        assert r["observers_received"] == [{"statuses": expected, "bundles": expected}]
+    assert data["meta"]["contacts"] == 2 and data["meta"]["phases"] == 3
+    assert "robot CPU ms/robot-step" in stdout
