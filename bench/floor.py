@@ -104,7 +104,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    "statuses and bundles (run_swarm: 1, 2 when recording)")
     p.add_argument("--no-clock", action="store_true", help="no /clock tick per step and no "
                    "sim time (the real runs have both)")
-    p.add_argument("--dds", choices=("auto", "localhost", "profile"), default="auto")
+    p.add_argument("--dds", choices=("auto", "localhost", "profile", "shm"), default="auto",
+                   help="shm: the profile with shared memory for the samples")
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="auto")
     p.add_argument("--ready-timeout", type=float, default=None,
                    help="seconds for every writer to match (default 120 + 3 s per process)")
@@ -134,13 +135,14 @@ def dds_setup(processes: int, opts: argparse.Namespace, domain: int, work: Path
     """
     server = opts.discovery_server == "on" or (opts.discovery_server == "auto"
                                                and processes > AUTO_SERVER_PROCESSES)
-    profile = server or opts.dds == "profile" or (opts.dds == "auto"
-                                                  and processes > AUTO_PROFILE_PROCESSES)
-    env = dds_env(os.environ, profile)
+    shm = opts.dds == "shm"
+    profile = server or shm or opts.dds == "profile" or (
+        opts.dds == "auto" and processes > AUTO_PROFILE_PROCESSES)
+    env = dds_env(os.environ, profile, shm=shm)
     env.update(ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
     for var in ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT", "ROS_STATIC_PEERS"):
         env.pop(var, None)
-    what = "profile" if profile else "localhost"
+    what = "shm" if shm else "profile" if profile else "localhost"
     if not server:
         return env, None, None, what
     port = free_udp_port()
@@ -278,6 +280,7 @@ def run(n: int, opts: argparse.Namespace, domain: int) -> dict[str, object]:
     server = None
     children: list[Child] = []
     timeout = opts.ready_timeout or 120.0 + 3.0 * processes
+    failed = True
     try:
         if server_cmd is not None:
             server = start_server(server_cmd, server_env_)
@@ -302,9 +305,13 @@ def run(n: int, opts: argparse.Namespace, domain: int) -> dict[str, object]:
         rss = peak_rss_mb([c.proc.pid for c in robots])
         tell(stepper, "stop")
         stuck = wait_exit(children, EXIT_TIMEOUT_S)
+        failed = False
     finally:
         stop_all(children, server)
-        shutil.rmtree(work, ignore_errors=True)
+        if failed:
+            print(f"floor: the processes' stderr is kept in {work}", file=sys.stderr)
+        else:
+            shutil.rmtree(work, ignore_errors=True)
     row = figures(n, opts, dds, startup, done, cpu, rss, robots, observers)
     row.update(exited=sum(c.proc.returncode == 0 for c in children),
                processes=len(children), stuck=stuck)

@@ -86,6 +86,10 @@ MONITOR = (
     ParamSpec("exit_when_done", False, "Shut down after the last step of the scenario."),
     ParamSpec("end_timeout", 30.0, "After the world stops, wall seconds to wait for the last "
               "grids before finishing with what arrived [s].", low=0.0, high=3600.0),
+    ParamSpec("verdict_window", 1, "Steps W between a robot's last report and the world's "
+              "verdict on it: step k awaits the robots alive at k..k+W (1 in lockstep; "
+              "run_swarm and the launch files set it from the world's step_timeout in real "
+              "time).", low=1, high=1_000_000),
 )
 
 RECORDER = (

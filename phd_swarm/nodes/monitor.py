@@ -2,8 +2,10 @@
 
 An observer only: it subscribes to the world's truth and team state and to every robot's
 status and step outputs, and never publishes anything a robot reads. For each step k, once
-the outputs of every robot alive at step k have arrived (a robot the world declared dead
-during step k is not waited for), it
+the outputs of every robot alive at step k and at k+1 have arrived (a robot the world
+declared dead during step k is not waited for; in real time, alive at k..k+W for the team
+states in up to k+W, ``verdict_window`` W: a robot cut off at step k is counted dead only W
+steps later, the rule of :func:`phd_swarm.nodes.completeness.reporting`), it
 
 1. for an estimator observed through an image (its declared
    :class:`~phd_swarm.core.outputs.Observation`, :mod:`phd_swarm.nodes.observe`; the grid
@@ -258,13 +260,22 @@ class MonitorNode(Node):
 
     # ------------------------------------------------------------- processing
     def _expected(self, k: int) -> frozenset[int] | None:
-        """Robots whose windows make up step k, or None while that is not yet known."""
-        if k not in self.alive:
+        """Robots whose step-k outputs are awaited, or None before the team state of k+1.
+
+        Those alive at k and at k+1, ..., j, where j is the latest team state in, at most
+        k + ``verdict_window``: each later state can only drop robots (the world's verdict
+        on a robot that stopped reporting), so once everyone in this set has reported, so
+        has everyone of the final one.
+        """
+        expected = self.alive.get(k)
+        if expected is None or self.alive.get(k + 1) is None:
             return None
-        later = self.alive.get(k + 1)
-        if later is None:
-            return None
-        return completeness.reporters(self.alive[k], later)
+        for j in range(k + 1, k + self.params["verdict_window"] + 1):
+            later = self.alive.get(j)
+            if later is None:
+                break
+            expected = completeness.reporters(expected, later)
+        return expected
 
     def _process_ready_steps(self, force: bool = False) -> None:
         while not self.done and self.next_step < self.scenario.steps:

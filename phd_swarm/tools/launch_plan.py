@@ -28,7 +28,7 @@ from typing import Any
 from phd_swarm.config import RunConfig, load_run_config
 from phd_swarm.logs.mcap_log import LogError, read_metadata
 from phd_swarm.nodes.auth import write_key
-from phd_swarm.nodes.completeness import Completeness
+from phd_swarm.nodes.completeness import Completeness, verdict_window
 from phd_swarm.nodes.ros_params import ros_refusal
 from phd_swarm.nodes.topics import robot_namespace
 from phd_swarm.tools.dds import CLIENT_VARS, dds_env
@@ -262,7 +262,8 @@ def resolve_config(config: str | Path, *, robots: int | None = None,
     parameters (the fault options); ``realtime``: the world's ``mode``. In real time (by
     ``realtime`` or the config's own ``mode``) the robots' ``revive_every`` is the world's
     ``step_timeout`` in steps, unless the config or ``robot`` sets it
-    (:mod:`phd_swarm.nodes.silence`).
+    (:mod:`phd_swarm.nodes.silence`), and the monitor's ``verdict_window`` is the world's
+    (:func:`phd_swarm.nodes.completeness.verdict_window`), unless the config sets it.
     """
     rc = load_run_config(config)
     s = rc.scenario
@@ -297,7 +298,11 @@ def resolve_config(config: str | Path, *, robots: int | None = None,
         wall_dt = scenario.dt / float(rc.param("world", "realtime_factor"))
         robot["revive_every"] = max(1, math.ceil(float(rc.param("world", "step_timeout"))
                                                  / wall_dt))
-    return rc.with_overrides(scenario, robot=robot, world=world)
+    out = rc.with_overrides(scenario, robot=robot, world=world)
+    window = verdict_window(out)
+    if window == 1 or "verdict_window" in rc.nodes.get("monitor", {}):
+        return out
+    return out.with_overrides(monitor={"verdict_window": window})
 
 
 def run_name(rc: RunConfig) -> str:

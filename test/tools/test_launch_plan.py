@@ -267,3 +267,22 @@ def test_real_time_robots_hold_their_own_verdicts_for_the_worlds_step_timeout():
     assert resolve_config(config, realtime=True).param("robot", "revive_every") == 30
     kept = resolve_config(config, realtime=True, robot={"revive_every": 4})
     assert kept.param("robot", "revive_every") == 4
+
+
+def test_a_real_time_monitor_awaits_reports_for_the_worlds_verdict_window(tmp_path):
+    import yaml
+
+    from phd_swarm.nodes.completeness import verdict_window
+    from phd_swarm.tools.launch_plan import resolve_config
+
+    config = ROOT / "config" / "dames_static.yaml"
+    assert resolve_config(config).param("monitor", "verdict_window") == 1
+    realtime = resolve_config(config, realtime=True)
+    # 15 s of step timeout at 0.5 s steps, plus one (nodes/completeness.py).
+    assert realtime.param("monitor", "verdict_window") == verdict_window(realtime) == 31
+    # A window of the config's own is kept.
+    doc = yaml.safe_load(config.read_text())
+    doc.setdefault("monitor", {}).setdefault("ros__parameters", {})["verdict_window"] = 3
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(yaml.safe_dump(doc))
+    assert resolve_config(mine, realtime=True).param("monitor", "verdict_window") == 3
