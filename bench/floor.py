@@ -51,7 +51,13 @@ from pathlib import Path
 import numpy as np
 from results_io import machine_meta, write_results
 
-from phd_swarm.tools.dds import dds_env, free_udp_port, server_env, server_profile
+from phd_swarm.tools.dds import (
+    DDS_PROFILE,
+    dds_env,
+    free_udp_port,
+    server_env,
+    server_profile,
+)
 from phd_swarm.tools.discovery_server import UP as SERVER_UP
 from phd_swarm.tools.launch_plan import AUTO_PROFILE_PROCESSES, AUTO_SERVER_PROCESSES
 
@@ -105,7 +111,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--no-clock", action="store_true", help="no /clock tick per step and no "
                    "sim time (the real runs have both)")
     p.add_argument("--dds", choices=("auto", "localhost", "profile", "shm"), default="auto",
-                   help="shm: the profile with shared memory for the samples")
+                   help="shm: the profile plus Fast DDS's shared memory for the samples")
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="auto")
     p.add_argument("--ready-timeout", type=float, default=None,
                    help="seconds for every writer to match (default 120 + 3 s per process)")
@@ -138,7 +144,11 @@ def dds_setup(processes: int, opts: argparse.Namespace, domain: int, work: Path
     shm = opts.dds == "shm"
     profile = server or shm or opts.dds == "profile" or (
         opts.dds == "auto" and processes > AUTO_PROFILE_PROCESSES)
-    env = dds_env(os.environ, profile, shm=shm)
+    env = dds_env(os.environ, profile)
+    if shm:
+        xml = work / "loopback_shm.xml"
+        xml.write_text(shm_profile(DDS_PROFILE.read_text()))
+        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(xml)
     env.update(ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
     for var in ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT", "ROS_STATIC_PEERS"):
         env.pop(var, None)
@@ -153,6 +163,28 @@ def dds_setup(processes: int, opts: argparse.Namespace, domain: int, work: Path
     senv = server_env(env, xml)
     env["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{port}"
     return env, cmd, senv, what + "+server"
+
+
+def shm_profile(udp: str) -> str:
+    """The repository's UDP profile (``udp``, its text) with shared memory for the samples.
+
+    Fast DDS's SHM transport is added before the UDP one, and the default unicast locators
+    (UDP on 127.0.0.1) are dropped, so that Fast DDS announces one per transport and a
+    writer reaches a reader on this host through shared memory; discovery (metatraffic)
+    stays on UDP, 127.0.0.1. For ``--dds shm``, a measurement only (issue 39): run_swarm
+    has no such option, since such a start never matched at 100 processes.
+    """
+    shm = ("      <transport_descriptor>\n        <transport_id>phd_swarm_shm</transport_id>\n"
+           "        <type>SHM</type>\n      </transport_descriptor>\n"
+           "    </transport_descriptors>")
+    out = udp.replace("    </transport_descriptors>", shm, 1)
+    out = out.replace("<userTransports>\n", "<userTransports>\n"
+                      "          <transport_id>phd_swarm_shm</transport_id>\n", 1)
+    out = re.sub(r"\s*<defaultUnicastLocatorList>.*?</defaultUnicastLocatorList>", "", out,
+                 flags=re.S)
+    if out.count("phd_swarm_shm") != 2 or "defaultUnicastLocatorList" in out:
+        raise RuntimeError(f"{DDS_PROFILE} is not laid out as shm_profile expects")
+    return out
 
 
 def start_server(cmd: list[str], env: dict[str, str], timeout: float = 60.0
