@@ -110,6 +110,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                    "statuses and bundles (run_swarm: 1, 2 when recording)")
     p.add_argument("--no-clock", action="store_true", help="no /clock tick per step and no "
                    "sim time (the real runs have both)")
+    p.add_argument("--send", choices=("inbox", "outbox"), default="inbox",
+                   help="outbox: each phase's envelope once, on the robot's own outbox "
+                   "topic that its contacts read (bench/floor_peer.py)")
     p.add_argument("--dds", choices=("auto", "localhost", "profile", "shm"), default="auto",
                    help="shm: the profile plus Fast DDS's shared memory for the samples")
     p.add_argument("--discovery-server", choices=("auto", "on", "off"), default="auto")
@@ -308,6 +311,7 @@ def run(n: int, opts: argparse.Namespace, domain: int) -> dict[str, object]:
               "--phases", str(opts.phases), "--envelope-bytes", str(opts.envelope_bytes),
               "--bundle-bytes", str(opts.bundle_bytes), "--world-bytes", str(opts.world_bytes),
               "--status-bytes", str(opts.status_bytes), "--observers", str(opts.observers),
+              "--send", opts.send,
               *(["--no-clock"] if opts.no_clock else [])]
     server = None
     children: list[Child] = []
@@ -383,7 +387,7 @@ def figures(n: int, opts: argparse.Namespace, dds: str, startup: float, done: di
     completed = sum(c.last("steps_done") == steps for c in robots)
     received = [{key: c.last(key) for key in ("statuses", "bundles")} for c in observers]
     return {"robots": n, "steps": steps, "contacts": int(min(opts.contacts, n - 1)),
-            "phases": opts.phases, "envelope_bytes": opts.envelope_bytes,
+            "phases": opts.phases, "send": opts.send, "envelope_bytes": opts.envelope_bytes,
             "bundle_bytes": opts.bundle_bytes, "world_bytes": opts.world_bytes,
             "status_bytes": opts.status_bytes, "observers": len(observers), "dds": dds,
             "startup_s": round(startup, 1), "stepping_wall_s": round(wall, 3),
@@ -439,6 +443,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         print_row(rows[-1])
     meta = machine_meta(steps=opts.steps, contacts=opts.contacts, phases=opts.phases,
+                        send=opts.send,
                         envelope_bytes=opts.envelope_bytes, bundle_bytes=opts.bundle_bytes,
                         world_bytes=opts.world_bytes, status_bytes=opts.status_bytes,
                         observers=opts.observers, clock=not opts.no_clock,

@@ -5,6 +5,7 @@ Usage (bench/floor.py starts these; by hand only to debug one)::
     python bench/floor_peer.py robot|stepper|observer --index I --robots N --steps S
         [--contacts 16] [--phases 3] [--envelope-bytes 1000] [--bundle-bytes 8000]
         [--world-bytes 1000] [--status-bytes 200] [--observers 1] [--no-clock]
+        [--send inbox|outbox]
 
 The message pattern of a lockstep team with no work done (issue 39). Every message is a
 ``std_msgs/UInt8MultiArray`` of the given size published as CDR bytes, and every
@@ -21,7 +22,9 @@ bytes say (sender, step, phase). Topics and QoS are the real ones
   ``--phases`` phases it sends one envelope to each contact's ``/robot_<c>/inbox`` (its
   contacts: r +- 1 .. r +- contacts / 2 on a ring, :func:`contacts`) and waits for its
   contacts' envelopes of that phase; then it publishes a status on ``/team/status`` and a
-  bundle on ``/team/outputs``.
+  bundle on ``/team/outputs``. With ``--send outbox`` it sends each phase's envelope once,
+  on its own ``/robot_<r>/outbox``, which its contacts read (one writer and ``contacts``
+  readers per robot: the same bytes reach every contact, as a state or a cell does).
 - ``observer`` (the monitor): reads ``/team/status`` and ``/team/outputs``.
 
 Robots and observers run on sim time (``use_sim_time``, as the real runs' configs have
@@ -108,6 +111,8 @@ class FloorConfig:
     status_bytes: int = 200
     observers: int = 1
     clock: bool = True
+    #: ``inbox``: an envelope per contact on its inbox; ``outbox``: one on the own outbox.
+    send: str = "inbox"
 
 
 def contacts(robot: int, robots: int, count: int) -> np.ndarray:
@@ -192,16 +197,23 @@ class FloorRobot(FloorProcess):
         super().__init__(f"floor_robot_{cfg.index}", cfg, sim_time=True)
         r = cfg.index
         self.contacts = contacts(r, cfg.robots, cfg.contacts)
-        self.inboxes = [self.create_publisher(UInt8MultiArray, f"/robot_{c}/inbox", INBOX_PUB)
-                        for c in self.contacts]
+        if cfg.send == "outbox":
+            self.inboxes = [self.create_publisher(UInt8MultiArray, f"/robot_{r}/outbox",
+                                                  INBOX_PUB)]
+            for c in self.contacts:
+                self.create_subscription(UInt8MultiArray, f"/robot_{c}/outbox",
+                                         self._on_envelope, INBOX_SUB, raw=True)
+        else:
+            self.inboxes = [self.create_publisher(UInt8MultiArray, f"/robot_{c}/inbox",
+                                                  INBOX_PUB) for c in self.contacts]
+            self.create_subscription(UInt8MultiArray, f"/robot_{r}/inbox", self._on_envelope,
+                                     INBOX_SUB, raw=True)
         self.status_pub = self.create_publisher(UInt8MultiArray, TEAM_STATUS, STEP_PUB)
         self.outputs_pub = self.create_publisher(UInt8MultiArray, TEAM_OUTPUTS, STEP_PUB)
         self.create_subscription(UInt8MultiArray, WORLD_ROBOTS, self._on_team, STEP_SUB,
                                  raw=True)
         self.create_subscription(UInt8MultiArray, f"/robot_{r}/measurements", self._on_scan,
                                  STEP_SUB, raw=True)
-        self.create_subscription(UInt8MultiArray, f"/robot_{r}/inbox", self._on_envelope,
-                                 INBOX_SUB, raw=True)
         self.envelope = payload(cfg.envelope_bytes)
         self.status = payload(cfg.status_bytes)
         self.bundle = payload(cfg.bundle_bytes)
@@ -215,9 +227,13 @@ class FloorRobot(FloorProcess):
 
     def unmatched(self) -> list[str]:
         """Contacts' inboxes without a reader, and the team topics short of readers."""
+        need = self.cfg.observers
+        if self.cfg.send == "outbox":
+            return _short(self.inboxes[0], len(self.contacts), "outbox") \
+                + _short(self.status_pub, 1 + need, TEAM_STATUS) \
+                + _short(self.outputs_pub, need, TEAM_OUTPUTS)
         no_reader = [int(c) for c, pub in zip(self.contacts, self.inboxes, strict=True)
                      if pub.get_subscription_count() < 1]
-        need = self.cfg.observers
         return ([f"inboxes of robots {no_reader}: no reader"] if no_reader else []) \
             + _short(self.status_pub, 1 + need, TEAM_STATUS) \
             + _short(self.outputs_pub, need, TEAM_OUTPUTS)
@@ -443,10 +459,11 @@ def parse_args(argv: list[str]) -> FloorConfig:
                           ("observers", 1)):
         p.add_argument(f"--{name}", type=int, default=default)
     p.add_argument("--no-clock", action="store_true", help="no /clock, no sim time")
+    p.add_argument("--send", choices=("inbox", "outbox"), default="inbox")
     a = p.parse_args(argv)
     return FloorConfig(a.role, a.index, a.robots, a.steps, a.contacts, a.phases,
                        a.envelope_bytes, a.bundle_bytes, a.world_bytes, a.status_bytes,
-                       a.observers, not a.no_clock)
+                       a.observers, not a.no_clock, a.send)
 
 
 if __name__ == "__main__":
