@@ -28,7 +28,7 @@ from collections.abc import Sequence
 from itertools import accumulate
 from typing import Any
 
-from phd_swarm.nodes import cdr
+from phd_swarm.nodes import cdr, cdr_cut
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm_msgs.msg import MessageBundle
 
@@ -82,43 +82,16 @@ def unpack_cdr(data: bytes) -> tuple[int, int, list[tuple[str, bytes]]]:
                           in zip(topics, offsets[:-1], offsets[1:], strict=True)]
 
 
-_U32 = struct.Struct("<I")
-_HEAD = struct.Struct("<iII")  # sender, step, number of topics
-
-
-def _string(data: bytes, at: int) -> tuple[str, int]:
-    """The CDR string at ``at`` (4-aligned) and the offset after it."""
-    (n,) = _U32.unpack_from(data, at)
-    end = at + 4 + n
-    if n == 0 or end > len(data) or data[end - 1] != 0:
-        raise ValueError(f"bad string of {n} bytes at byte {at}")
-    return data[at + 4:end - 1].decode(), end
+_HEAD = struct.Struct("<iI")  # sender, step
 
 
 def _cut_le(data: bytes) -> tuple[int, int, list[str], list[int], bytes]:
     """The fields of a little-endian ``MessageBundle`` (offsets from the body's start, 4)."""
-    def aligned(at: int) -> int:
-        return at + (-(at - 4) % 4)
-
-    _, at = _string(data, 12)  # header: stamp (8 bytes), then frame_id
-    sender, step, n = _HEAD.unpack_from(data, aligned(at))
-    at = aligned(at) + 12
-    if n > len(data) // 5:
-        raise ValueError(f"{n} topics in {len(data)} bytes")
-    topics = []
-    for _ in range(n):
-        topic, at = _string(data, aligned(at))
-        topics.append(topic)
-    at = aligned(at)
-    (m,) = _U32.unpack_from(data, at)
-    if at + 4 + 4 * m > len(data):
-        raise ValueError(f"{m} offsets past the end")
-    offsets = list(struct.unpack_from(f"<{m}I", data, at + 4))
-    at += 4 + 4 * m
-    (size,) = _U32.unpack_from(data, at)
-    if at + 4 + size > len(data):
-        raise ValueError(f"{size} bytes of data past the end")
-    return sender, step, topics, offsets, data[at + 4:at + 4 + size]
+    _, at = cdr_cut.string_at(data, 12)  # header: stamp (8 bytes), then frame_id
+    at = cdr_cut.aligned(at)
+    sender, step = _HEAD.unpack_from(data, at)
+    topics, offsets, body, _ = cdr_cut.names_offsets_body(data, at + 8)
+    return sender, step, topics, offsets, body
 
 
 def publish_watched(pub: Any, data: bytes) -> None:

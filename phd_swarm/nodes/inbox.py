@@ -28,7 +28,7 @@ from typing import Any
 
 from rclpy.serialization import deserialize_message
 
-from phd_swarm.nodes import auth, cdr
+from phd_swarm.nodes import auth, cdr, cdr_cut
 from phd_swarm.nodes.convert import InvalidMessage, Unauthenticated
 from phd_swarm_msgs.msg import InboxMessage
 
@@ -73,12 +73,28 @@ def unpack_cdr(data: bytes, kinds: Collection[str], key: bytes | None = None
     """
     if key is not None and not auth.is_sealed(key, data):
         raise Unauthenticated("inbox message not signed with this run's key")
+    if data[:4] == cdr.ENCAPSULATION:
+        # Little-endian CDR, what every robot writes (pack_cdr): cut by hand, ~4x faster.
+        try:
+            (sender,) = _SENDER.unpack_from(data, 4)
+            names, offsets, body, end = cdr_cut.names_offsets_body(data, 8)
+            at = cdr_cut.aligned(end)
+            (size,) = _U32.unpack_from(data, at)  # the mac (is_sealed checked its bytes)
+            if size > len(data) - at - 4:
+                raise ValueError(f"a mac of {size} bytes past the end")
+        except (struct.error, UnicodeDecodeError, IndexError, ValueError) as exc:
+            raise InvalidMessage(f"not an inbox message: {exc}") from None
+        return sender, _cut(names, offsets, body, kinds)
     try:
         env = cdr.decode(InboxMessage, data)
     except cdr.CdrError as exc:
         raise InvalidMessage(f"not an inbox message: {exc}") from None
     return env["sender"], _cut(env["kinds"], env["offsets"].tolist(), env["data"].tobytes(),
                                kinds)
+
+
+_SENDER = struct.Struct("<i")
+_U32 = struct.Struct("<I")
 
 
 def unpack(msg: InboxMessage, kinds: Collection[str]) -> list[tuple[str, bytes]]:

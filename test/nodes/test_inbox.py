@@ -7,12 +7,14 @@ from array import array
 import numpy as np
 import pytest
 from geometry_msgs.msg import Point
+from hypothesis import given, settings
 from rclpy.serialization import deserialize_message, serialize_message
 
 from phd_swarm.core.exchange.voronoi_phd.messages import StateMsg
 from phd_swarm.nodes import convert, inbox
 from phd_swarm.nodes.convert import InvalidMessage
 from phd_swarm.nodes.faces.voronoi_phd import WIRE
+from phd_swarm.testing import fuzzed_bytes
 from phd_swarm_msgs.msg import InboxMessage, MeasurementSet, RobotState
 
 
@@ -108,3 +110,33 @@ def test_the_hand_written_envelope_is_the_codecs_byte_for_byte(pieces):
         "sender": 9, "kinds": [k for k, _ in pieces], "offsets": offsets,
         "data": np.frombuffer(b"".join(b for _, b in pieces), np.uint8)})
     assert inbox.pack_cdr(9, pieces) == expected
+
+
+_SEEDS = [inbox.pack_cdr(4, pieces, key) for key in (None, b"k" * 32)
+          for pieces in ([], [("state", b"\x00\x01\x00\x00abc")],
+                         [("cell", b"xy" * 9), ("transfer", b""), ("state", b"\x07")])]
+
+
+@settings(max_examples=500, deadline=None, derandomize=True, database=None)
+@given(fuzzed_bytes(_SEEDS))
+def test_the_hand_cut_reads_what_the_codec_reads(data):
+    """On any bytes: the codec's sender and pieces, or a refusal where the codec refuses."""
+    from phd_swarm.nodes import cdr
+
+    kinds = {"state", "cell", "transfer"}
+    try:
+        env = cdr.decode(InboxMessage, data)
+    except cdr.CdrError:
+        env = None
+    try:
+        got = inbox.unpack_cdr(data, kinds)
+    except InvalidMessage:
+        got = None
+    if got is not None:
+        assert env is not None and got[0] == env["sender"]
+        assert [k for k, _ in got[1]] == env["kinds"]
+        assert b"".join(p for _, p in got[1]) == env["data"].tobytes()
+    elif env is not None:
+        # The codec reads it; the cut refuses it only for what unpack refuses too.
+        with pytest.raises(InvalidMessage):
+            inbox._cut(env["kinds"], env["offsets"].tolist(), env["data"].tobytes(), kinds)
