@@ -288,3 +288,18 @@ def test_bench_floor_quick_steps_the_message_pattern_with_no_work(tmp_path):
         assert r["observers_received"] == [{"statuses": expected, "bundles": expected}]
     assert data["meta"]["contacts"] == 2 and data["meta"]["phases"] == 3
     assert "robot CPU ms/robot-step" in stdout
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_bench_floor_variants_outbox_over_shared_memory_lose_nothing(tmp_path):
+    # The variants weighed in issue 39: one envelope per phase on the robot's own outbox,
+    # and the UDP profile plus Fast DDS's shared memory (the profile written per run).
+    _, data = _quick_results("floor", tmp_path, "--send", "outbox", "--dds", "shm",
+                             "--discovery-server", "off", timeout=300)
+    (row,) = data["results"]
+    assert (row["dds"], row["send"], data["meta"]["send"]) == ("shm", "outbox", "outbox")
+    assert row["robots_completed"] == row["robots"] == 4, row["stuck"]
+    assert row["exited"] == row["processes"] == 6, row["stuck"]
+    expected = row["robots"] * row["steps"]
+    assert row["observers_received"] == [{"statuses": expected, "bundles": expected}]
