@@ -21,9 +21,9 @@ import struct
 _U32 = struct.Struct("<I")
 
 
-def aligned(at: int, size: int = 4) -> int:
-    """``at`` moved up to a multiple of ``size`` counted from the byte after the header."""
-    return at + (-(at - 4) % size)
+def aligned(at: int) -> int:
+    """``at`` moved up to a multiple of 4 counted from the byte after the header."""
+    return at + (-(at - 4) % 4)
 
 
 def string_at(data: bytes, at: int) -> tuple[str, int]:
